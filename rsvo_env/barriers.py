@@ -1,0 +1,353 @@
+"""Pairwise barrier rows of the responsibility-weighted QP, vectorised over all pairs.
+
+Every unordered pair (i, j) gives one row to each of its agents, ``A_i u_i <= b_i`` and
+``A_j u_j <= b_j``, whose sum is the centralized CBF condition of the pair. Rows are returned
+padded to a fixed width K with a mask, agents along axis 0 (DESIGN.md section 1).
+
+* Single integrator (paper, eq. ``qp``): ``A_i = -2 (x_i - x_j)``, ``b_i = omega_ij gamma h_ij``,
+  ``h_ij = |x_i - x_j|^2 - R^2``.
+* Double integrator (DESIGN.md section 3): one pair row ``c (-dp.a_i + dp.a_j) <= RHS`` split into
+  ``-c dp.a_i <= s_ij`` and ``c dp.a_j <= s_ji`` with ``s_ij + s_ji = RHS``.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+BARRIERS = ("braking", "hocbf")
+SPLITS = ("capability", "sign_aware", "paper")
+# Below this many agents all pairs are cheaper than a KD-tree query.
+DENSE_PAIRS_MAX_AGENTS = 64
+
+
+@dataclass(frozen=True)
+class Rows:
+    """Padded constraint rows: agent i's rows are ``A[i, k] . u <= b[i, k]`` where ``mask[i, k]``.
+
+    ``neighbor[i, k]`` is the other agent of the row (-1 on padding), ``h[i, k]`` the pair's
+    barrier value. ``min_h`` is the smallest barrier value over the pairs examined (all pairs,
+    or for the single integrator at large N, the pairs that the nearest-neighbour search finds,
+    which always include the closest one). Double-integrator diagnostics: ``unrecoverable``
+    and ``capped`` per row; ``n_unrecoverable_pairs``, ``n_capped_shares`` per call.
+    """
+
+    A: NDArray[np.float64]
+    b: NDArray[np.float64]
+    mask: NDArray[np.bool_]
+    neighbor: NDArray[np.int64]
+    h: NDArray[np.float64]
+    min_h: float
+    unrecoverable: NDArray[np.bool_]
+    capped: NDArray[np.bool_]
+    n_pairs: int
+    n_culled: int
+
+    @property
+    def n_unrecoverable_pairs(self) -> int:
+        return int(self.unrecoverable.sum()) // 2
+
+    @property
+    def n_capped_shares(self) -> int:
+        return int(self.capped.sum())
+
+
+def box_support(A: NDArray, lo: NDArray, hi: NDArray) -> NDArray:
+    """``max_{lo <= u <= hi} A . u`` for rows A (..., 2): the largest value a row can take."""
+    return np.maximum(A * lo, A * hi).sum(axis=-1)
+
+
+def sensing_radius(
+    omega_min: float, gamma: float, safety_radius: float, lo: NDArray, hi: NDArray
+) -> float:
+    """Distance beyond which no single-integrator row can bind (DESIGN.md section 3).
+
+    A row cannot bind when ``omega gamma (d^2 - R^2) >= max_box A u``; the right side is at most
+    ``2 d |U|`` with ``U`` the per-component speed bound, so the root of
+    ``omega gamma d^2 - 2 |U| d - omega gamma R^2`` bounds every binding pair. Infinite when
+    ``omega_min = 0`` (a fully altruistic agent must never close in on a theta = 0 agent).
+    """
+    if omega_min <= 0.0:
+        return float("inf")
+    u = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
+    wg = omega_min * gamma
+    return (u + np.sqrt(u * u + (wg * safety_radius) ** 2)) / wg
+
+
+@functools.lru_cache(maxsize=64)
+def _triu(n: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    I, J = np.triu_indices(n, 1)
+    I, J = I.astype(np.int64), J.astype(np.int64)
+    I.flags.writeable = False
+    J.flags.writeable = False
+    return I, J
+
+
+def all_pairs(n: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Every unordered pair (I < J) of n agents, in a fixed order."""
+    return _triu(n)
+
+
+def candidate_pairs(
+    positions: NDArray, radius: float = float("inf")
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Unordered pairs (I < J) that may interact: all pairs, or those within ``radius``."""
+    n = positions.shape[0]
+    if n < 2:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty
+    if not np.isfinite(radius) or n <= DENSE_PAIRS_MAX_AGENTS:
+        I, J = all_pairs(n)
+        if np.isfinite(radius):
+            d = np.linalg.norm(positions[I] - positions[J], axis=1)
+            keep = d <= radius
+            I, J = I[keep], J[keep]
+        return I, J
+    pairs = cKDTree(positions).query_pairs(radius, output_type="ndarray")
+    if len(pairs) == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty
+    # A fixed pair order keeps results bit-identical whatever order the tree returns.
+    order = np.lexsort((pairs[:, 1], pairs[:, 0]))
+    pairs = pairs[order]
+    return pairs[:, 0].astype(np.int64), pairs[:, 1].astype(np.int64)
+
+
+def nearest_h(positions: NDArray, safety_radius: float) -> float:
+    """``min_ij |x_i - x_j|^2 - R^2`` in O(N log N)."""
+    if positions.shape[0] < 2:
+        return float("inf")
+    d, _ = cKDTree(positions).query(positions, k=2)
+    return float(d[:, 1].min() ** 2 - safety_radius**2)
+
+
+@njit(cache=True)
+def _pack(n, I, J, A_i, b_i, b_j, h, exists, unrec, capped, lo, hi, cull):
+    """Directed rows of both agents of each pair, culled and packed in two O(P) passes.
+
+    Pair p gives agent I[p] the row (A_i[p], b_i[p]) and agent J[p] the row (-A_i[p], b_j[p]),
+    in pair order, so the result does not depend on anything but the inputs.
+    """
+    P = I.shape[0]
+    keep = np.zeros((P, 2), dtype=np.bool_)
+    counts = np.zeros(n, dtype=np.int64)
+    for p in range(P):
+        if not exists[p]:
+            continue
+        ax = A_i[p, 0]
+        ay = A_i[p, 1]
+        # box support of +A_i (agent I) and of -A_i (agent J)
+        sup_i = max(ax * lo[0], ax * hi[0]) + max(ay * lo[1], ay * hi[1])
+        sup_j = max(-ax * lo[0], -ax * hi[0]) + max(-ay * lo[1], -ay * hi[1])
+        if not cull or b_i[p] < sup_i:
+            keep[p, 0] = True
+            counts[I[p]] += 1
+        if not cull or b_j[p] < sup_j:
+            keep[p, 1] = True
+            counts[J[p]] += 1
+    width = 1
+    for i in range(n):
+        width = max(width, counts[i])
+    A = np.zeros((n, width, 2))
+    b = np.zeros((n, width))
+    hh = np.zeros((n, width))
+    mask = np.zeros((n, width), dtype=np.bool_)
+    nb = np.full((n, width), -1, dtype=np.int64)
+    un = np.zeros((n, width), dtype=np.bool_)
+    cp = np.zeros((n, width), dtype=np.bool_)
+    fill = np.zeros(n, dtype=np.int64)
+    kept = 0
+    for p in range(P):
+        for side in range(2):
+            if not keep[p, side]:
+                continue
+            kept += 1
+            if side == 0:
+                o, other, sign, rhs = I[p], J[p], 1.0, b_i[p]
+            else:
+                o, other, sign, rhs = J[p], I[p], -1.0, b_j[p]
+            k = fill[o]
+            fill[o] += 1
+            A[o, k, 0] = sign * A_i[p, 0]
+            A[o, k, 1] = sign * A_i[p, 1]
+            b[o, k] = rhs
+            hh[o, k] = h[p]
+            mask[o, k] = True
+            nb[o, k] = other
+            un[o, k] = unrec[p]
+            cp[o, k] = capped[p]
+    return A, b, mask, nb, hh, un, cp, kept
+
+
+def _finish(
+    n: int,
+    I: NDArray,
+    J: NDArray,
+    A_i: NDArray,
+    b_i: NDArray,
+    b_j: NDArray,
+    h: NDArray,
+    lo: NDArray,
+    hi: NDArray,
+    exists: NDArray,
+    unrecoverable: NDArray,
+    capped: NDArray,
+    min_h: float,
+    cull: bool = True,
+) -> Rows:
+    """Both agents' rows of each pair, exact culling, packing.
+
+    Culling (DESIGN.md section 3): a row whose right side is at least the largest value its left
+    side takes over the box cannot bind anywhere in the box, so dropping it changes no solution.
+    """
+    A_pad, b_pad, mask, nb, h_pad, unrec_pad, cap_pad, kept = _pack(
+        n,
+        I,
+        J,
+        np.ascontiguousarray(A_i),
+        b_i,
+        b_j,
+        h,
+        exists,
+        unrecoverable,
+        capped,
+        lo,
+        hi,
+        cull,
+    )
+    n_culled = 2 * int(exists.sum()) - int(kept)
+    return Rows(
+        A=A_pad,
+        b=b_pad,
+        mask=mask,
+        neighbor=nb,
+        h=h_pad,
+        min_h=min_h,
+        unrecoverable=unrec_pad,
+        capped=cap_pad,
+        n_pairs=len(I),
+        n_culled=n_culled,
+    )
+
+
+def single_integrator_rows(
+    positions: NDArray,
+    omega_pairs: NDArray,
+    I: NDArray,
+    J: NDArray,
+    gamma: float,
+    safety_radius: float,
+    lo: NDArray,
+    hi: NDArray,
+    min_h: float | None = None,
+    cull: bool = True,
+) -> Rows:
+    """Rows of the paper's QP (eq. ``qp``, Thm. 1) for the pairs (I, J).
+
+    ``omega_pairs`` (P, 2): column 0 is omega of agent ``I[p]`` against ``J[p]``, column 1 the
+    other way round; the two sum to 1, so the two rows sum to eq. ``centralized-cbf``.
+    """
+    n = positions.shape[0]
+    dx = positions[I] - positions[J]
+    h = np.einsum("ij,ij->i", dx, dx) - safety_radius**2
+    A_i = -2.0 * dx
+    b_i = omega_pairs[:, 0] * gamma * h
+    b_j = omega_pairs[:, 1] * gamma * h
+    none = np.zeros(len(I), dtype=bool)
+    if min_h is None:
+        min_h = float(h.min()) if len(h) else float("inf")
+    return _finish(n, I, J, A_i, b_i, b_j, h, lo, hi, ~none, none, none, min_h, cull)
+
+
+def double_integrator_rows(
+    positions: NDArray,
+    velocities: NDArray,
+    omega_pairs: NDArray,
+    I: NDArray,
+    J: NDArray,
+    gamma: float,
+    safety_radius: float,
+    lo: NDArray,
+    hi: NDArray,
+    barrier: str = "braking",
+    split: str = "capability",
+    gamma2: float | None = None,
+    dt: float | None = None,
+    cull: bool = True,
+) -> Rows:
+    """Rows for the double integrator (DESIGN.md section 3).
+
+    ``barrier="braking"``: ``h = |dp| - Ds - max(0, -q)^2 / (2 A)`` with ``A = 2 a_max`` and
+    ``q = dp.dv/|dp|``; ``c = 1``; while closing (``q < 0``)
+    ``RHS = (|dv|^2 - q^2) - A |dp| + gamma h A |dp| / (-q)``. While opening there is no row,
+    unless ``dt`` is given: then the one-step row
+    ``RHS = (|dv|^2 - q^2) + 2 |dp| (q + gamma (|dp| - Ds)) / dt`` keeps a sampled system from
+    crossing into ``h < 0`` between two samples.
+    ``barrier="hocbf"``: ``h = |dp|^2 - Ds^2``, ``c = 2``,
+    ``RHS = 2 |dv|^2 + 2 (g1 + g2) dp.dv + g1 g2 h``.
+    Splits of RHS into ``s_ij + s_ji``: ``paper`` (``omega RHS``), ``sign_aware`` (``omega RHS``
+    if ``RHS >= 0`` else ``(1 - omega) RHS``), ``capability`` (sign-aware, clipped to
+    ``[-cap_i, RHS + cap_j]`` with ``cap`` the most evasive push the box allows along dp; when
+    ``RHS < -(cap_i + cap_j)`` the pair is unrecoverable and each takes ``RHS / 2``).
+    """
+    if barrier not in BARRIERS:
+        raise ValueError(f"barrier {barrier!r} is unknown; use one of {BARRIERS}")
+    if split not in SPLITS:
+        raise ValueError(f"split {split!r} is unknown; use one of {SPLITS}")
+    n = positions.shape[0]
+    dp = positions[I] - positions[J]
+    dv = velocities[I] - velocities[J]
+    dist = np.linalg.norm(dp, axis=1)
+    dpdv = np.einsum("ij,ij->i", dp, dv)
+    dv2 = np.einsum("ij,ij->i", dv, dv)
+    if barrier == "braking":
+        a_max = float(np.min(np.minimum(-lo, hi)))
+        A_brake = 2.0 * a_max
+        q = dpdv / dist
+        closing = q < 0.0
+        h = dist - safety_radius - np.maximum(0.0, -q) ** 2 / (2.0 * A_brake)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rhs = (dv2 - q * q) - A_brake * dist + gamma * h * A_brake * dist / (-q)
+        c = 1.0
+        if dt is None:
+            rhs = np.where(closing, rhs, np.inf)
+            exists = closing
+        else:
+            # While opening (q >= 0) h = |dp| - Ds has relative degree 1 in continuous time, so
+            # it gets no row there; a sampled system can still cross q = 0 and land at h < 0
+            # within one step. The one-step condition h+ >= (1 - gamma dt) h, with h+ from the
+            # exact second-order expansion of |dp| under constant a, closes that gap.
+            rhs_open = (dv2 - q * q) + 2.0 * dist * (q + gamma * (dist - safety_radius)) / dt
+            rhs = np.where(closing, rhs, rhs_open)
+            exists = np.ones(len(I), dtype=bool)
+    else:
+        g1 = gamma
+        g2 = gamma if gamma2 is None else gamma2
+        h = dist * dist - safety_radius**2
+        rhs = 2.0 * dv2 + 2.0 * (g1 + g2) * dpdv + g1 * g2 * h
+        c = 2.0
+        exists = np.ones(len(I), dtype=bool)
+    A_i = -c * dp
+    w = omega_pairs[:, 0]
+    unrecoverable = np.zeros(len(I), dtype=bool)
+    capped = np.zeros(len(I), dtype=bool)
+    finite_rhs = np.where(exists, rhs, 0.0)
+    if split == "paper":
+        s_i = w * finite_rhs
+    else:
+        s_i = np.where(finite_rhs >= 0.0, w * finite_rhs, (1.0 - w) * finite_rhs)
+        if split == "capability":
+            cap_i = box_support(-A_i, lo, hi)  # agent i's most evasive value of -A_i . a
+            cap_j = box_support(A_i, lo, hi)  # agent j's, for its row -(-A_i) . a_j
+            unrecoverable = exists & (finite_rhs < -(cap_i + cap_j))
+            clipped = np.clip(s_i, -cap_i, finite_rhs + cap_j)
+            capped = exists & ~unrecoverable & (clipped != s_i)
+            s_i = np.where(unrecoverable, 0.5 * finite_rhs, clipped)
+    s_j = finite_rhs - s_i
+    min_h = float(h.min()) if len(h) else float("inf")
+    return _finish(n, I, J, A_i, s_i, s_j, h, lo, hi, exists, unrecoverable, capped, min_h, cull)

@@ -1,0 +1,5 @@
+import sys
+
+from rsvo_env.cli.main import main
+
+sys.exit(main())

@@ -1,0 +1,22 @@
+"""Entry point of the ``rsvo`` command."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="rsvo", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    sub.add_parser("demo", help="filter a two-agent head-on swap and print the distance kept")
+    args = parser.parse_args(argv)
+    if args.command == "demo":
+        from rsvo_env.cli import demo
+
+        return demo.main()
+    return 2  # pragma: no cover - argparse rejects unknown commands
+
+
+if __name__ == "__main__":
+    sys.exit(main())

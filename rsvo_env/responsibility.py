@@ -1,0 +1,130 @@
+"""Responsibility-associated Social Value Orientation (R-SVO) and the responsibility weights.
+
+Paper: Def. 1 (eq. ``rsvo``) gives ``phi_i = theta_i / (theta_i + theta_j) * pi/2``; Thm. 1 gives
+the Local Pairwise Responsibility Weight ``omega_i = cos^2(phi_i)``. Since
+``phi_i + phi_j = pi/2``, ``omega_i + omega_j = 1``, which is what makes the decentralized rows sum
+to the centralized CBF condition (eq. ``centralized-cbf``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rsvo_env.validation import check_theta
+
+WEIGHTING_MODES = ("asymmetric", "symmetric")
+Weighting = str | Callable[[NDArray[np.float64]], ArrayLike]
+
+
+def _pair(theta_i: ArrayLike, theta_j: ArrayLike) -> tuple[NDArray, NDArray]:
+    ti = check_theta(theta_i, name="theta_i", allow_scalar=True)
+    tj = check_theta(theta_j, name="theta_j", allow_scalar=True)
+    return np.broadcast_arrays(ti, tj)
+
+
+def r_svo(theta_i: ArrayLike, theta_j: ArrayLike) -> NDArray[np.float64] | float:
+    """R-SVO angle ``phi_i = theta_i/(theta_i+theta_j) * pi/2`` (paper, Def. 1, eq. ``rsvo``).
+
+    Broadcasts over arrays. ``theta_i = theta_j = 0`` has no value in the paper; we define
+    ``phi = pi/4`` there (equal personalities), so that ``omega = 0.5``.
+    Raises ``ValueError`` naming the index for negative, NaN or infinite scores.
+    """
+    ti, tj = _pair(theta_i, theta_j)
+    phi = _share(ti, tj) * (np.pi / 2)
+    return float(phi) if phi.ndim == 0 else phi
+
+
+def _share(ti: NDArray, tj: NDArray) -> NDArray:
+    """``theta_i / (theta_i + theta_j)``, 0.5 where both are 0; inputs already validated."""
+    total = ti + tj
+    safe = np.where(total > 0, total, 1.0)
+    return np.where(total > 0, ti / safe, 0.5)
+
+
+def pair_omega(ti: NDArray, tj: NDArray) -> NDArray:
+    """omega of validated scores, vectorised: ``(1 + cos(pi * share)) / 2`` (Def. 1, Thm. 1)."""
+    return 0.5 * (1.0 + np.cos(np.pi * _share(ti, tj)))
+
+
+def responsibility_weight(theta_i: ArrayLike, theta_j: ArrayLike) -> NDArray[np.float64] | float:
+    """Local Pairwise Responsibility Weight ``omega_i = cos^2(phi_i)`` (paper, Thm. 1).
+
+    Evaluated as ``(1 + cos(2 phi)) / 2``, which is exactly 0.5 at ``phi = pi/4``, 0 at
+    ``pi/2`` and 1 at 0 (``cos(phi)**2`` is 0.5000000000000001 at ``pi/4``); 0.5 when both
+    scores are 0. A smaller theta (egoist) gives a larger omega, a looser row
+    ``A_i u <= omega_i b_i``.
+    """
+    omega = pair_omega(*_pair(theta_i, theta_j))
+    return float(omega) if omega.ndim == 0 else omega
+
+
+def weight_matrix(theta: ArrayLike, mode: Weighting = "asymmetric") -> NDArray[np.float64]:
+    """The (N, N) matrix ``W[i, j] = omega_i`` of agent i against agent j (Thm. 1).
+
+    ``mode="asymmetric"``: the paper's R-SVO weights. ``mode="symmetric"``: 0.5 everywhere, the
+    homogeneous baseline of the paper's symmetric examples. A callable ``theta -> W`` is
+    validated: entries in [0, 1] and ``W + W.T == 1`` off the diagonal (to 1e-9), since without
+    that the pair rows no longer sum to the centralized condition. The diagonal is 0 (no row).
+    The upper triangle is computed and the lower one set to ``1 - W.T``, so the pair sum is 1 to
+    one rounding.
+    """
+    th = check_theta(theta, name="theta")
+    n = th.shape[0]
+    if callable(mode):
+        w = np.array(mode(th.copy()), dtype=np.float64)
+        return validate_weight_matrix(w, n)
+    if mode == "symmetric":
+        w = np.full((n, n), 0.5)
+    elif mode == "asymmetric":
+        w = pair_omega(th[:, None], th[None, :])
+        upper = np.triu(np.ones((n, n), dtype=bool), 1)
+        w.T[upper] = 1.0 - w[upper]
+    else:
+        raise ValueError(
+            f"weighting mode {mode!r} is unknown; use one of {WEIGHTING_MODES} or a callable"
+        )
+    np.fill_diagonal(w, 0.0)
+    return w
+
+
+def validate_weight_matrix(w: NDArray[np.float64], n: int) -> NDArray[np.float64]:
+    """Check a user-given weight matrix: shape (n, n), finite, in [0, 1], ``W + W.T = 1``."""
+    if w.shape != (n, n):
+        raise ValueError(f"weight matrix has shape {w.shape}, expected ({n}, {n})")
+    off = ~np.eye(n, dtype=bool)
+    bad = off & ~(np.isfinite(w) & (w >= 0.0) & (w <= 1.0))
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ValueError(
+            f"weight matrix entry omega[{i}, {j}] = {float(w[i, j])!r} is not in [0, 1]"
+        )
+    pair_sum = w + w.T
+    bad = off & (np.abs(pair_sum - 1.0) > 1e-9)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ValueError(
+            f"weight matrix breaks omega[{i}, {j}] + omega[{j}, {i}] = 1: "
+            f"{float(w[i, j])!r} + {float(w[j, i])!r} = {float(pair_sum[i, j])!r}"
+        )
+    w = w.copy()
+    np.fill_diagonal(w, 0.0)
+    return w
+
+
+def min_pair_weight(theta: NDArray[np.float64], mode: Weighting) -> float:
+    """Smallest omega over all pairs, in O(N): the most altruistic agent against the most egoistic.
+
+    Used to bound the sensing radius beyond which no row can bind (DESIGN.md section 3).
+    """
+    if len(theta) < 2:
+        return 0.5
+    if mode == "symmetric":
+        return 0.5
+    if mode == "asymmetric":
+        order = np.sort(theta)
+        return float(pair_omega(order[-1], order[0]))
+    w = weight_matrix(theta, mode)
+    return float(w[~np.eye(len(theta), dtype=bool)].min())

@@ -1,0 +1,229 @@
+"""Batched exact projection onto a box intersected with half-planes, in 2-D (numba).
+
+Each problem is the paper's QP (eq. ``qp``): ``min |u - u_nom|^2`` s.t. ``lo <= u <= hi`` and
+``A u <= b``. In two dimensions it is solved exactly by the incremental algorithm of ORCA's
+``linearProgram2`` (van den Berg et al.): start at the box projection of the nominal, add the rows
+one by one, and when a row is violated re-solve on that row's line, a 1-D problem bounded by the
+box and the rows before it. Seidel's argument makes this exact: if the optimum of the first k
+rows violates row k, the optimum of the first k+1 rows lies on row k's line.
+
+An empty polygon (one that stays empty when every row is moved out by ``FEASIBILITY_TOL``) is
+reported (``feasible=False``) and replaced by the action that minimises the
+largest normalised violation ``max_k (a_k u - b_k)/|a_k|`` over the box, and among those the one
+closest to the nominal (the role of ORCA's ``linearProgram3``). The min-max value is found by
+bisection on the shift ``t`` of all rows, each probe an exact feasibility test, to 1e-13 relative.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+from numpy.typing import NDArray
+
+# Slack on "row satisfied", scaled by the row's size: below it a point is on the row's line.
+_EPS = 1e-12
+_ACTIVE_TOL = 1e-9
+# A polygon that a shift of every row by this much makes non-empty is feasible: round-off in h
+# (agents resting exactly at the safety distance) must not be reported as infeasibility.
+FEASIBILITY_TOL = 1e-9
+
+
+@njit(cache=True, inline="always")
+def _project(nx, ny, rows, nrows, shift, lo0, lo1, hi0, hi1):
+    """Exact projection of (nx, ny) onto box ∩ {rows[k,:2]·u <= rows[k,2] + shift}.
+
+    ``rows`` are normalised (unit normal). Returns (ux, uy, feasible).
+    """
+    ux = min(max(nx, lo0), hi0)
+    uy = min(max(ny, lo1), hi1)
+    for k in range(nrows):
+        ax = rows[k, 0]
+        ay = rows[k, 1]
+        bk = rows[k, 2] + shift
+        tol = _EPS * (1.0 + abs(bk))
+        if ax == 0.0 and ay == 0.0:
+            if bk < -tol:
+                return ux, uy, False
+            continue
+        if ax * ux + ay * uy <= bk + tol:
+            continue
+        # The new optimum lies on the line ax*x + ay*y = bk: p0 + t*d.
+        p0x = bk * ax
+        p0y = bk * ay
+        dx = -ay
+        dy = ax
+        t = dx * (nx - p0x) + dy * (ny - p0y)
+        tlo = -np.inf
+        thi = np.inf
+        # Box, x then y.
+        if abs(dx) > 1e-15:
+            t1 = (lo0 - p0x) / dx
+            t2 = (hi0 - p0x) / dx
+            tlo = max(tlo, min(t1, t2))
+            thi = min(thi, max(t1, t2))
+        elif p0x < lo0 - tol or p0x > hi0 + tol:
+            return ux, uy, False
+        if abs(dy) > 1e-15:
+            t1 = (lo1 - p0y) / dy
+            t2 = (hi1 - p0y) / dy
+            tlo = max(tlo, min(t1, t2))
+            thi = min(thi, max(t1, t2))
+        elif p0y < lo1 - tol or p0y > hi1 + tol:
+            return ux, uy, False
+        for m in range(k):
+            amx = rows[m, 0]
+            amy = rows[m, 1]
+            if amx == 0.0 and amy == 0.0:
+                continue
+            denom = amx * dx + amy * dy
+            numer = rows[m, 2] + shift - (amx * p0x + amy * p0y)
+            if abs(denom) <= 1e-15:
+                # Parallel to row k: either all of line k satisfies row m, or none of it does.
+                if numer < -_EPS * (1.0 + abs(rows[m, 2] + shift)):
+                    return ux, uy, False
+                continue
+            if denom > 0.0:
+                thi = min(thi, numer / denom)
+            else:
+                tlo = max(tlo, numer / denom)
+        if tlo > thi:
+            if tlo - thi > _EPS * (1.0 + abs(tlo) + abs(thi)):
+                return ux, uy, False
+            t = 0.5 * (tlo + thi)
+        else:
+            t = min(max(t, tlo), thi)
+        ux = p0x + t * dx
+        uy = p0y + t * dy
+    return ux, uy, True
+
+
+@njit(cache=True, inline="always")
+def _max_violation(ux, uy, rows, nrows, lo0, lo1, hi0, hi1):
+    worst = -np.inf
+    for k in range(nrows):
+        v = rows[k, 0] * ux + rows[k, 1] * uy - rows[k, 2]
+        worst = max(worst, v)
+    return worst
+
+
+@njit(cache=True)
+def _solve_one(nom, A, b, mask, lo, hi, rows, out):
+    """One QP; ``rows`` is scratch space. Returns (feasible, active, max_violation)."""
+    nrows = 0
+    for k in range(A.shape[0]):
+        if not mask[k]:
+            continue
+        ax = A[k, 0]
+        ay = A[k, 1]
+        norm = np.hypot(ax, ay)
+        if norm > 0.0:
+            rows[nrows, 0] = ax / norm
+            rows[nrows, 1] = ay / norm
+            rows[nrows, 2] = b[k] / norm
+        else:
+            rows[nrows, 0] = 0.0
+            rows[nrows, 1] = 0.0
+            rows[nrows, 2] = b[k]
+        nrows += 1
+    lo0, lo1, hi0, hi1 = lo[0], lo[1], hi[0], hi[1]
+    nx, ny = nom[0], nom[1]
+    ux, uy, ok = _project(nx, ny, rows, nrows, 0.0, lo0, lo1, hi0, hi1)
+    violation = 0.0
+    if not ok:
+        # Least violation: the smallest shift t of every row that makes the polygon non-empty.
+        cx = min(max(nx, lo0), hi0)
+        cy = min(max(ny, lo1), hi1)
+        t_hi = max(_max_violation(cx, cy, rows, nrows, lo0, lo1, hi0, hi1), 0.0)
+        # Even the box corners cannot do better than the best corner; start there when smaller.
+        for cx2 in (lo0, hi0):
+            for cy2 in (lo1, hi1):
+                t_hi = min(
+                    t_hi, max(_max_violation(cx2, cy2, rows, nrows, lo0, lo1, hi0, hi1), 0.0)
+                )
+        t_lo = 0.0
+        for _ in range(200):
+            if t_hi - t_lo <= 1e-13 * (1.0 + t_hi):
+                break
+            mid = 0.5 * (t_lo + t_hi)
+            _, _, feas = _project(nx, ny, rows, nrows, mid, lo0, lo1, hi0, hi1)
+            if feas:
+                t_hi = mid
+            else:
+                t_lo = mid
+        ux, uy, feas = _project(nx, ny, rows, nrows, t_hi, lo0, lo1, hi0, hi1)
+        violation = max(_max_violation(ux, uy, rows, nrows, lo0, lo1, hi0, hi1), 0.0)
+        if violation <= FEASIBILITY_TOL:
+            ok = True
+            violation = 0.0
+    # The input bounds are physical limits: never exceed them, not even by a rounding.
+    ux = min(max(ux, lo0), hi0)
+    uy = min(max(uy, lo1), hi1)
+    active = 0
+    for k in range(nrows):
+        if abs(rows[k, 0] * ux + rows[k, 1] * uy - rows[k, 2]) <= _ACTIVE_TOL * (
+            1.0 + abs(rows[k, 2])
+        ):
+            active += 1
+    out[0] = ux
+    out[1] = uy
+    return ok, active, violation
+
+
+@njit(cache=True)
+def _solve_serial(nominal, A, b, mask, lo, hi, out, feasible, active, violation):
+    rows = np.empty((A.shape[1], 3))
+    for i in range(nominal.shape[0]):
+        ok, act, vio = _solve_one(nominal[i], A[i], b[i], mask[i], lo[i], hi[i], rows, out[i])
+        feasible[i] = ok
+        active[i] = act
+        violation[i] = vio
+
+
+@njit(cache=True, parallel=True)
+def _solve_parallel(nominal, A, b, mask, lo, hi, out, feasible, active, violation):
+    n = nominal.shape[0]
+    chunk = 64
+    for c in prange((n + chunk - 1) // chunk):
+        rows = np.empty((A.shape[1], 3))
+        for i in range(c * chunk, min(n, (c + 1) * chunk)):
+            ok, act, vio = _solve_one(nominal[i], A[i], b[i], mask[i], lo[i], hi[i], rows, out[i])
+            feasible[i] = ok
+            active[i] = act
+            violation[i] = vio
+
+
+PARALLEL_THRESHOLD = 256
+
+
+def solve_batch(
+    nominal: NDArray[np.float64],
+    A: NDArray[np.float64],
+    b: NDArray[np.float64],
+    mask: NDArray[np.bool_],
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64]]:
+    """Solve B independent 2-D QPs exactly.
+
+    Shapes: nominal (B, 2), A (B, K, 2), b (B, K), mask (B, K), lo and hi (B, 2) or (2,).
+    Returns actions (B, 2), feasible (B,), active row count (B,), and the largest normalised
+    violation (B,) (0 where feasible).
+    """
+    nominal = np.ascontiguousarray(nominal, dtype=np.float64)
+    n = nominal.shape[0]
+    A = np.ascontiguousarray(A, dtype=np.float64).reshape(n, -1, 2)
+    b = np.ascontiguousarray(b, dtype=np.float64).reshape(n, -1)
+    mask = np.ascontiguousarray(mask, dtype=np.bool_).reshape(n, -1)
+    lo = np.ascontiguousarray(np.broadcast_to(lo, (n, 2)), dtype=np.float64)
+    hi = np.ascontiguousarray(np.broadcast_to(hi, (n, 2)), dtype=np.float64)
+    out = np.empty((n, 2))
+    feasible = np.empty(n, dtype=np.bool_)
+    active = np.empty(n, dtype=np.int64)
+    violation = np.empty(n)
+    if A.shape[1] == 0:
+        A = np.zeros((n, 1, 2))
+        b = np.zeros((n, 1))
+        mask = np.zeros((n, 1), dtype=np.bool_)
+    kernel = _solve_parallel if n >= PARALLEL_THRESHOLD else _solve_serial
+    kernel(nominal, A, b, mask, lo, hi, out, feasible, active, violation)
+    return out, feasible, active, violation

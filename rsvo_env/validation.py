@@ -1,0 +1,107 @@
+"""Input checks shared by the filter, the world and the wrappers.
+
+Every check raises ``ValueError`` whose message names the field, the agent index (or name) and
+the offending value, and never repairs the input.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+
+def _label(index: int, names: Sequence[str] | None) -> str:
+    if names is None:
+        return f"agent {index}"
+    return f"agent {names[index]!r} (index {index})"
+
+
+def check_theta(
+    theta: ArrayLike, name: str = "theta", allow_scalar: bool = False
+) -> NDArray[np.float64]:
+    """Personality scores: finite and >= 0 (paper, Sec. III-A: theta_i in R>=0)."""
+    try:
+        arr = np.asarray(theta, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be numeric, got {theta!r}") from exc
+    if arr.ndim == 0 and not allow_scalar:
+        arr = arr.reshape(1)
+    if not allow_scalar and arr.ndim != 1:
+        raise ValueError(f"{name} must be a 1-D array of scores, got shape {arr.shape}")
+    bad = ~np.isfinite(arr) | (arr < 0)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        where = f"[{idx[0]}]" if len(idx) == 1 else (f"[{idx}]" if idx else "")
+        value = arr[idx] if idx else arr
+        raise ValueError(
+            f"{name}{where} = {float(value)!r}: a personality score must be finite and >= 0"
+            + (f" (agent {idx[0]})" if len(idx) == 1 else "")
+        )
+    return arr
+
+
+def check_vectors(
+    values: ArrayLike,
+    name: str,
+    n: int | None = None,
+    names: Sequence[str] | None = None,
+) -> NDArray[np.float64]:
+    """An (N, 2) array of finite planar vectors (positions, velocities, actions)."""
+    try:
+        arr = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a numeric (N, 2) array, got {values!r}") from exc
+    if arr.ndim != 2 or arr.shape[1] != 2 or (n is not None and arr.shape[0] != n):
+        want = f"({n}, 2)" if n is not None else "(N, 2)"
+        raise ValueError(f"{name} has shape {arr.shape}, expected {want}")
+    bad = ~np.isfinite(arr).all(axis=1)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ValueError(f"{name}[{i}] = {arr[i].tolist()} is not finite ({_label(i, names)})")
+    return arr
+
+
+def check_action(value: ArrayLike, agent: str, shape: tuple[int, ...] = (2,)) -> NDArray:
+    """One agent's action: numeric, the right shape, finite."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"action of agent {agent!r} is not numeric: {value!r}") from exc
+    if arr.shape != shape:
+        raise ValueError(f"action of agent {agent!r} has shape {arr.shape}, expected {shape}")
+    if not np.isfinite(arr).all():
+        raise ValueError(f"action of agent {agent!r} = {arr.tolist()} is not finite")
+    return arr
+
+
+def check_action_dict(
+    actions: dict, agents: Sequence[str], shape: tuple[int, ...] = (2,)
+) -> NDArray[np.float64]:
+    """A PettingZoo action dict: exactly the live agents, each a finite action of ``shape``.
+
+    Returns the actions stacked in ``agents`` order.
+    """
+    if not isinstance(actions, dict):
+        raise ValueError(f"actions must be a dict keyed by agent name, got {type(actions)!r}")
+    unknown = [a for a in actions if a not in agents]
+    if unknown:
+        raise ValueError(
+            f"unknown agent name {unknown[0]!r} with action {actions[unknown[0]]!r}; "
+            f"live agents are {list(agents)}"
+        )
+    missing = [a for a in agents if a not in actions]
+    if missing:
+        raise ValueError(f"no action given for agent {missing[0]!r}")
+    out = np.empty((len(agents),) + shape)
+    for k, agent in enumerate(agents):
+        out[k] = check_action(actions[agent], agent, shape)
+    return out
+
+
+def check_positive(value: float, name: str) -> float:
+    v = float(value)
+    if not np.isfinite(v) or v <= 0:
+        raise ValueError(f"{name} = {value!r} must be a finite number > 0")
+    return v

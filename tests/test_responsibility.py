@@ -1,0 +1,92 @@
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rsvo_env.responsibility import r_svo, responsibility_weight, weight_matrix
+
+scores = st.floats(min_value=0.0, max_value=1e6, allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=300, deadline=None)
+@given(scores, scores)
+def test_phi_bounds_and_complement(ti, tj):
+    phi_i, phi_j = r_svo(ti, tj), r_svo(tj, ti)
+    assert 0.0 <= phi_i <= np.pi / 2
+    assert phi_i + phi_j == pytest.approx(np.pi / 2, abs=1e-12)
+
+
+@settings(max_examples=300, deadline=None)
+@given(scores, scores)
+def test_weights_sum_to_one(ti, tj):
+    assert responsibility_weight(ti, tj) + responsibility_weight(tj, ti) == pytest.approx(
+        1.0, abs=1e-12
+    )
+
+
+@settings(max_examples=100, deadline=None)
+@given(scores)
+def test_equal_theta_is_prosocial(t):
+    assert r_svo(t, t) == pytest.approx(np.pi / 4, abs=1e-15)
+    assert responsibility_weight(t, t) == pytest.approx(0.5, abs=1e-15)
+
+
+@settings(max_examples=300, deadline=None)
+@given(scores, scores, st.floats(min_value=1e-3, max_value=1e6))
+def test_more_egoistic_means_larger_omega(ti, delta, tj):
+    # a smaller theta_i (more egoistic) never lowers omega_i, and strictly raises it
+    w_ego = responsibility_weight(ti, tj)
+    w_alt = responsibility_weight(ti + delta, tj)
+    assert w_ego >= w_alt
+    if delta > 1e-6 * (ti + tj) and 1e-6 < w_ego < 1.0:
+        assert w_ego > w_alt
+
+
+def test_limits():
+    assert responsibility_weight(0.0, 0.0) == 0.5
+    assert r_svo(0.0, 0.0) == pytest.approx(np.pi / 4)
+    assert responsibility_weight(0.0, 3.0) == 1.0  # pure egoist: the pair's whole budget
+    assert responsibility_weight(3.0, 0.0) == 0.0
+    assert responsibility_weight(1.0, 4.0) == pytest.approx(np.cos(np.pi / 10) ** 2)
+
+
+def test_broadcasting():
+    th = np.array([1.0, 2.0, 3.0])
+    w = responsibility_weight(th[:, None], th[None, :])
+    assert w.shape == (3, 3)
+    np.testing.assert_allclose(w + w.T, 1.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("bad", [-1.0, np.nan, np.inf, -np.inf])
+def test_bad_theta_names_index(bad):
+    th = [1.0, 2.0, bad, 4.0]
+    with pytest.raises(ValueError, match=r"theta\[2\].*agent 2"):
+        weight_matrix(th)
+    with pytest.raises(ValueError, match=r"theta_i"):
+        r_svo(bad, 1.0)
+
+
+@pytest.mark.parametrize("mode", ["asymmetric", "symmetric"])
+def test_weight_matrix_pairs_sum_to_one(mode):
+    rng = np.random.default_rng(0)
+    th = rng.uniform(0, 10, 12)
+    th[3] = 0.0
+    W = weight_matrix(th, mode)
+    off = ~np.eye(12, dtype=bool)
+    np.testing.assert_allclose((W + W.T)[off], 1.0, atol=1e-15)
+    assert np.all(np.diag(W) == 0)
+    if mode == "symmetric":
+        assert np.all(W[off] == 0.5)
+    else:
+        assert W[0, 1] == pytest.approx(responsibility_weight(th[0], th[1]), abs=1e-15)
+
+
+def test_weight_matrix_callable_is_validated():
+    good = weight_matrix([1.0, 2.0], lambda t: [[0.0, 0.3], [0.7, 0.0]])
+    assert good[0, 1] == 0.3
+    with pytest.raises(ValueError, match=r"omega\[0, 1\] \+ omega\[1, 0\] = 1"):
+        weight_matrix([1.0, 2.0], lambda t: [[0.0, 0.3], [0.3, 0.0]])
+    with pytest.raises(ValueError, match=r"omega\[0, 1\] = -0.5"):
+        weight_matrix([1.0, 2.0], lambda t: [[0.0, -0.5], [1.5, 0.0]])
+    with pytest.raises(ValueError, match="unknown"):
+        weight_matrix([1.0, 2.0], "selfish")

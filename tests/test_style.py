@@ -1,0 +1,37 @@
+"""The code base stays ruff clean, and the core never imports the floors above it."""
+
+import ast
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_ruff_clean():
+    ruff = shutil.which("ruff") or str(Path(sys.executable).parent / "ruff")
+    if not Path(ruff).exists():
+        pytest.fail("ruff is not installed (it is in the dev extra)")
+    out = subprocess.run([ruff, "check", str(ROOT)], capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout + out.stderr
+
+
+def test_core_does_not_import_upper_floors():
+    """DESIGN.md section 1: rsvo_env (but its cli/) never imports wrappers, training,
+    benchmarks or stable_baselines3."""
+    forbidden = ("wrappers", "training", "benchmarks", "stable_baselines3")
+    offenders = []
+    for path in (ROOT / "rsvo_env").rglob("*.py"):
+        if "cli" in path.relative_to(ROOT / "rsvo_env").parts:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                names = [node.module]
+            offenders += [f"{path}: {n}" for n in names if n.split(".")[0] in forbidden]
+    assert not offenders, offenders

@@ -1,0 +1,1 @@
+"""PettingZoo and Gymnasium wrappers around the rsvo_env core."""
