@@ -22,8 +22,7 @@ from scipy.spatial import cKDTree
 
 BARRIERS = ("braking", "hocbf")
 SPLITS = ("capability", "sign_aware", "paper")
-# Below this many agents all pairs are cheaper than a KD-tree query.
-DENSE_PAIRS_MAX_AGENTS = 64
+from rsvo_env.neighbors import DENSE_MAX_AGENTS as DENSE_PAIRS_MAX_AGENTS  # noqa: E402
 
 
 @dataclass(frozen=True)

@@ -145,6 +145,9 @@ class SafetyFilter:
         if config is not None and kwargs:
             raise TypeError("pass either a FilterConfig or keyword arguments, not both")
         self.config = config if config is not None else FilterConfig(**kwargs)  # type: ignore[arg-type]
+        self._omega_in: object = None
+        self._omega_ok = np.zeros((0, 0))
+        self._omega_min = 0.5
 
     def pair_radius(self, theta: NDArray, omega: NDArray | None) -> float:
         """Radius of the pair search: the sensing radius (single integrator) or the user's."""
@@ -152,8 +155,10 @@ class SafetyFilter:
         if cfg.dynamics == "double_integrator":
             return cfg.neighbor_radius if cfg.neighbor_radius is not None else float("inf")
         if omega is not None:
-            n = omega.shape[0]
-            w_min = float(omega[~np.eye(n, dtype=bool)].min()) if n > 1 else 0.5
+            if omega is not self._omega_ok:
+                n = omega.shape[0]
+                self._omega_min = float(omega[~np.eye(n, dtype=bool)].min()) if n > 1 else 0.5
+            w_min = self._omega_min
         else:
             w_min = min_pair_weight(theta, cfg.weighting)
         radius = barriers.sensing_radius(w_min, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
@@ -205,7 +210,15 @@ class SafetyFilter:
             raise ValueError(f"theta has {th.shape[0]} entries, expected {n} (one per agent)")
         W = None
         if omega is not None:
-            W = validate_weight_matrix(np.asarray(omega, dtype=np.float64), n)
+            # The world hands the same matrix object every step until theta or the mode changes;
+            # validating it once is enough.
+            if omega is self._omega_in and self._omega_ok.shape == (n, n):
+                W = self._omega_ok
+            else:
+                W = validate_weight_matrix(np.asarray(omega, dtype=np.float64), n)
+                off = ~np.eye(n, dtype=bool)
+                self._omega_min = float(W[off].min()) if n > 1 else 0.5
+                self._omega_in, self._omega_ok = omega, W
         dense = n <= barriers.DENSE_PAIRS_MAX_AGENTS and cfg.neighbor_radius is None
         if dense:
             # Few agents: every pair, and exact culling drops the rows that cannot bind.

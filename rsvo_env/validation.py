@@ -81,22 +81,28 @@ def check_action_dict(
 ) -> NDArray[np.float64]:
     """A PettingZoo action dict: exactly the live agents, each a finite action of ``shape``.
 
-    Returns the actions stacked in ``agents`` order.
+    Returns the actions stacked in ``agents`` order. The common case is checked in bulk; the
+    per-agent checks run only to name the offender.
     """
     if not isinstance(actions, dict):
         raise ValueError(f"actions must be a dict keyed by agent name, got {type(actions)!r}")
-    unknown = [a for a in actions if a not in agents]
-    if unknown:
-        raise ValueError(
-            f"unknown agent name {unknown[0]!r} with action {actions[unknown[0]]!r}; "
-            f"live agents are {list(agents)}"
-        )
-    missing = [a for a in agents if a not in actions]
-    if missing:
+    live = set(agents)
+    if len(actions) != len(live) or not live.issuperset(actions):
+        unknown = [a for a in actions if a not in live]
+        if unknown:
+            raise ValueError(
+                f"unknown agent name {unknown[0]!r} with action {actions[unknown[0]]!r}; "
+                f"live agents are {list(agents)}"
+            )
+        missing = [a for a in agents if a not in actions]
         raise ValueError(f"no action given for agent {missing[0]!r}")
-    out = np.empty((len(agents),) + shape)
-    for k, agent in enumerate(agents):
-        out[k] = check_action(actions[agent], agent, shape)
+    try:
+        out = np.array([actions[a] for a in agents], dtype=np.float64)
+    except (TypeError, ValueError):
+        out = None
+    if out is None or out.shape != (len(agents),) + shape or not np.isfinite(out).all():
+        for agent in agents:
+            check_action(actions[agent], agent, shape)
     return out
 
 

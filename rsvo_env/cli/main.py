@@ -10,11 +10,16 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="rsvo", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("demo", help="filter a two-agent head-on swap and print the distance kept")
-    args = parser.parse_args(argv)
+    sub.add_parser("simulate", help="run a scenario; metrics, GIF, figure", add_help=False)
+    args, rest = parser.parse_known_args(argv)
     if args.command == "demo":
         from rsvo_env.cli import demo
 
         return demo.main()
+    if args.command == "simulate":
+        from rsvo_env.cli import simulate
+
+        return simulate.main(rest)
     return 2  # pragma: no cover - argparse rejects unknown commands
 
 

@@ -1,0 +1,86 @@
+"""Scripted nominal controllers: move-to-goal, the right-hand rule, lane following.
+
+The paper's nominal controller is ``u = -k (x - x_target)`` (Sec. V-A), scaled here to the speed
+limit. The paper uses a "right hand heuristic rule" against deadlock without defining it; ours
+rotates the nominal clockwise by a fixed angle while a neighbour is within a trigger distance
+(DESIGN.md section 5).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rsvo_env.neighbors import nearest_distance
+
+
+def clip_norm(u: NDArray[np.float64], limit: float) -> NDArray[np.float64]:
+    """Scale each row of u down to norm <= limit (directions kept)."""
+    norm = np.linalg.norm(u, axis=-1, keepdims=True)
+    return u * np.minimum(1.0, limit / np.maximum(norm, 1e-300))
+
+
+def move_to_goal(
+    positions: NDArray[np.float64], goals: NDArray[np.float64], k: float, u_max: float
+) -> NDArray[np.float64]:
+    """``u = -k (x - goal)``, scaled to norm <= u_max (paper, Sec. V-A)."""
+    return clip_norm(-k * (positions - goals), u_max)
+
+
+def right_hand_active(
+    positions: NDArray[np.float64],
+    at_goal: NDArray[np.bool_],
+    trigger: float,
+    nearest: NDArray[np.float64] | None = None,
+) -> NDArray[np.bool_]:
+    """Agents for which the right-hand rule fires: a neighbour closer than ``trigger``, and the
+    agent not at its goal. ``nearest`` may pass precomputed nearest-neighbour distances."""
+    if nearest is None:
+        nearest = nearest_distance(positions)
+    return (nearest < trigger) & ~at_goal
+
+
+def rotate(u: NDArray[np.float64], angle: NDArray[np.float64] | float) -> NDArray[np.float64]:
+    """Rotate each row of u counter-clockwise by ``angle`` radians (negative: clockwise)."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.stack([c * u[..., 0] - s * u[..., 1], s * u[..., 0] + c * u[..., 1]], axis=-1)
+
+
+def right_hand_rule(
+    u: NDArray[np.float64], active: NDArray[np.bool_], angle_deg: float
+) -> NDArray[np.float64]:
+    """Rotate the nominal of the active agents clockwise by ``angle_deg``."""
+    return np.where(active[:, None], rotate(u, -np.deg2rad(angle_deg)), u)
+
+
+def lane_following(
+    positions: NDArray[np.float64],
+    velocities: NDArray[np.float64],
+    lane_start: NDArray[np.float64],
+    merge_point: NDArray[np.float64],
+    v_des: float,
+    k_v: float,
+    k_lat: float,
+    a_max: float,
+) -> NDArray[np.float64]:
+    """Acceleration that tracks ``v_des`` along each vehicle's lane, then up the main lane.
+
+    Before the merge point (y below it) a vehicle follows the line from its lane start to the
+    merge point; past it, the main lane x = merge_x heading +y. The command is a speed-tracking
+    term along the lane plus a lateral spring-damper toward the lane line, scaled to
+    norm <= a_max.
+    """
+    on_ramp = positions[:, 1] < merge_point[1]
+    ramp_dir = merge_point - lane_start
+    ramp_dir = ramp_dir / np.linalg.norm(ramp_dir, axis=1, keepdims=True)
+    main_dir = np.broadcast_to(np.array([0.0, 1.0]), positions.shape)
+    direction = np.where(on_ramp[:, None], ramp_dir, main_dir)
+    normal = np.stack([-direction[:, 1], direction[:, 0]], axis=1)
+    # both lane lines pass through the merge point
+    lateral = np.einsum("ij,ij->i", positions - merge_point, normal)
+    lateral_speed = np.einsum("ij,ij->i", velocities, normal)
+    speed_along = np.einsum("ij,ij->i", velocities, direction)
+    a = (k_v * (v_des - speed_along))[:, None] * direction - (
+        k_lat * lateral + 2.0 * np.sqrt(k_lat) * lateral_speed
+    )[:, None] * normal
+    return clip_norm(a, a_max)

@@ -1,0 +1,45 @@
+"""The ids, in gymnasium's registry (JointControlEnv) and PettingZoo's (the filtered ParallelEnv).
+
+Entry points are strings (DESIGN.md section 1): the core names the wrappers here and nowhere
+else, and they are imported only when ``make`` is called.
+"""
+
+from __future__ import annotations
+
+import gymnasium
+import pettingzoo
+
+IDS = {
+    "rsvo/PositionSwap-v0": "position_swap",
+    "rsvo/CircularSwap-v0": "circular_swap",
+    "rsvo/RampMerge-v0": "ramp_merge",
+    "rsvo/Crowd-v0": "crowd",
+}
+
+
+def register_all() -> None:
+    for env_id, scenario in IDS.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(
+                id=env_id,
+                entry_point="wrappers.joint:JointControlEnv",
+                kwargs={"scenario": scenario},
+                disable_env_checker=False,
+            )
+        if env_id not in pettingzoo.parallel_registry:
+            pettingzoo.register(
+                "parallel",
+                env_id,
+                "wrappers.safety_filter:filtered_parallel_env",
+                kwargs={"scenario": scenario},
+            )
+        if env_id not in pettingzoo.aec_registry:
+            pettingzoo.register(
+                "aec",
+                env_id,
+                "wrappers.safety_filter:filtered_aec_env",
+                kwargs={"scenario": scenario},
+            )
+
+
+register_all()

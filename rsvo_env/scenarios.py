@@ -1,0 +1,317 @@
+"""The paper's experiments (Sec. V) and a random crowd, one small class each.
+
+A scenario owns its parameters (DESIGN.md section 5 defaults, every one overridable by keyword;
+an unknown keyword raises ``TypeError`` naming it), draws initial states from the env's seeded
+generator, and computes the scripted nominal controller.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rsvo_env import nominal
+from rsvo_env.validation import check_positive, check_theta
+
+COMMON_DEFAULTS: dict[str, Any] = {
+    "dt": 0.01,
+    "goal_tolerance": 0.05,
+    "deadlock_resolution": "right_hand",
+    "theta": None,
+    "theta_max": 1000.0,
+}
+DEADLOCK_RESOLUTIONS = ("right_hand", "none")
+
+
+class Scenario:
+    """Base class: parameters, initial state, nominal controller, arena."""
+
+    name: ClassVar[str] = ""
+    dynamics: ClassVar[str] = "single_integrator"
+    defaults: ClassVar[dict[str, Any]] = {}
+
+    def __init__(self, **kwargs: Any) -> None:
+        params = {**COMMON_DEFAULTS, **self.defaults}
+        unknown = sorted(set(kwargs) - set(params))
+        if unknown:
+            raise TypeError(
+                f"{self.name}() got unknown keyword argument(s) {unknown}; known: {sorted(params)}"
+            )
+        params.update(kwargs)
+        self.params = params
+        for key in ("dt", "goal_tolerance", "safety_radius", "gamma", "k", "theta_max"):
+            if key in params:
+                params[key] = check_positive(params[key], f"{self.name}.{key}")
+        params[self.limit_name] = check_positive(
+            params[self.limit_name], f"{self.name}.{self.limit_name}"
+        )
+        if params["deadlock_resolution"] not in DEADLOCK_RESOLUTIONS:
+            raise ValueError(
+                f"{self.name}.deadlock_resolution = {params['deadlock_resolution']!r}; "
+                f"use one of {DEADLOCK_RESOLUTIONS}"
+            )
+        steps = params["max_steps"]
+        if not isinstance(steps, (int, np.integer)) or steps < 1:
+            raise ValueError(f"{self.name}.max_steps = {steps!r} must be an integer >= 1")
+        if params["theta"] is not None:
+            self.check_theta(params["theta"])
+
+    # -- parameters the env reads -------------------------------------------------------------
+    @property
+    def limit_name(self) -> str:
+        return "a_max" if self.dynamics == "double_integrator" else "u_max"
+
+    @property
+    def num_agents(self) -> int:
+        return int(self.params["num_agents"])
+
+    @property
+    def u_max(self) -> float:
+        """The input bound: speed (single integrator) or acceleration (double integrator)."""
+        return float(self.params[self.limit_name])
+
+    def check_theta(self, theta: Any) -> NDArray[np.float64]:
+        th = check_theta(theta)
+        if th.shape != (self.num_agents,):
+            raise ValueError(f"theta has {th.shape[0]} entries, expected {self.num_agents}")
+        too_big = th > self.params["theta_max"]
+        if too_big.any():
+            i = int(np.argmax(too_big))
+            raise ValueError(
+                f"theta[{i}] = {float(th[i])!r} exceeds theta_max = {self.params['theta_max']} "
+                f"(agent {i}); raise theta_max to allow it"
+            )
+        return th
+
+    def default_theta(self, rng: np.random.Generator) -> NDArray[np.float64]:
+        if self.params["theta"] is not None:
+            return self.check_theta(self.params["theta"])
+        return np.ones(self.num_agents)
+
+    # -- what subclasses provide --------------------------------------------------------------
+    def initial_state(
+        self, rng: np.random.Generator
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """(positions, velocities, goals), each (N, 2)."""
+        raise NotImplementedError
+
+    def arena(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """A box (lo, hi) that holds every start and goal, for drawing and observation bounds."""
+        raise NotImplementedError
+
+    def nominal(self, world: Any) -> NDArray[np.float64]:
+        """Scripted nominal actions (N, 2) in physical units: move-to-goal + right-hand rule."""
+        u = nominal.move_to_goal(world.positions, world.goals, self.params["k"], self.u_max)
+        if self.params["deadlock_resolution"] == "right_hand":
+            active = self.right_hand_active(world)
+            u = nominal.right_hand_rule(u, active, self.params["rh_angle_deg"])
+        return u
+
+    def right_hand_active(self, world: Any) -> NDArray[np.bool_]:
+        at_goal = self.at_goal(world.positions, world.goals)
+        return nominal.right_hand_active(
+            world.positions, at_goal, self.rh_trigger, world.nearest_distance()
+        )
+
+    @property
+    def rh_trigger(self) -> float:
+        return float(self.params["rh_trigger"])
+
+    def at_goal(self, positions: NDArray, goals: NDArray) -> NDArray[np.bool_]:
+        return np.linalg.norm(positions - goals, axis=1) <= self.params["goal_tolerance"]
+
+
+class PositionSwap(Scenario):
+    """Two agents swap corners (paper, Sec. V-A, Fig. 3)."""
+
+    name = "position_swap"
+    defaults = {
+        "num_agents": 2,
+        "start": ((-4.0, -4.0), (4.0, 4.0)),
+        "safety_radius": 1.0,
+        "u_max": 2.0,
+        "k": 2.0,
+        "gamma": 5.0,
+        "rh_angle_deg": 30.0,
+        "rh_trigger_factor": 1.5,
+        "max_steps": 1500,
+    }
+
+    @property
+    def rh_trigger(self) -> float:
+        return self.params["rh_trigger_factor"] * self.params["safety_radius"]
+
+    def initial_state(self, rng):
+        start = np.array(self.params["start"], dtype=np.float64)
+        if start.shape != (self.num_agents, 2):
+            raise ValueError(f"position_swap.start has shape {start.shape}, expected (2, 2)")
+        return start.copy(), np.zeros_like(start), start[::-1].copy()
+
+    def arena(self):
+        start = np.array(self.params["start"], dtype=np.float64)
+        pad = 2.0 * self.params["safety_radius"]
+        return start.min(axis=0) - pad, start.max(axis=0) + pad
+
+
+class CircularSwap(Scenario):
+    """N agents on a circle, each to the antipodal point (paper, Sec. V-C, Figs. 5-7)."""
+
+    name = "circular_swap"
+    defaults = {
+        "num_agents": 6,
+        "circle_radius": 5.0,
+        "safety_radius": 1.0,
+        "u_max": 3.0,
+        "k": 5.0,
+        "gamma": 12.0,
+        "rh_angle_deg": 60.0,
+        "rh_trigger": 1.1,
+        "max_steps": 2000,
+    }
+
+    def initial_state(self, rng):
+        n = self.num_agents
+        angles = 2.0 * np.pi * np.arange(n) / n
+        start = self.params["circle_radius"] * np.stack([np.cos(angles), np.sin(angles)], 1)
+        return start, np.zeros_like(start), -start
+
+    def arena(self):
+        r = self.params["circle_radius"] + 2.0 * self.params["safety_radius"]
+        return np.array([-r, -r]), np.array([r, r])
+
+
+class RampMerge(Scenario):
+    """Two vehicles merge from lanes at +-angle onto a main lane (paper, Sec. V-B, Fig. 4).
+
+    Double integrator; the vehicles do not stop: one is ``at_goal`` once past ``finish_y``.
+    """
+
+    name = "ramp_merge"
+    dynamics = "double_integrator"
+    defaults = {
+        "num_agents": 2,
+        "merge_point": (0.0, 70.0),
+        "lane_angle_deg": 20.0,
+        "start_distance": 60.0,
+        "v0": 15.0,
+        "v_des": 20.0,
+        "k_v": 1.0,
+        "k_lat": 1.0,
+        "a_max": 5.0,
+        "safety_radius": 5.0,
+        "gamma": 1.0,
+        "barrier": "braking",
+        "split": "capability",
+        "finish_y": 130.0,
+        "max_steps": 1500,
+    }
+
+    def lane_starts(self) -> NDArray[np.float64]:
+        m = np.array(self.params["merge_point"], dtype=np.float64)
+        a = np.deg2rad(self.params["lane_angle_deg"])
+        d = self.params["start_distance"]
+        return m + d * np.array([[-np.sin(a), -np.cos(a)], [np.sin(a), -np.cos(a)]])
+
+    def initial_state(self, rng):
+        start = self.lane_starts()
+        m = np.array(self.params["merge_point"], dtype=np.float64)
+        heading = (m - start) / np.linalg.norm(m - start, axis=1, keepdims=True)
+        goals = np.array([[m[0], self.params["finish_y"]]] * 2)
+        return start, self.params["v0"] * heading, goals
+
+    def arena(self):
+        start = self.lane_starts()
+        lo = np.array([start[:, 0].min(), start[:, 1].min()]) - 10.0
+        hi = np.array([start[:, 0].max(), self.params["finish_y"]]) + 10.0
+        return lo, hi
+
+    def nominal(self, world):
+        p = self.params
+        return nominal.lane_following(
+            world.positions,
+            world.velocities,
+            self.lane_starts(),
+            np.array(p["merge_point"], dtype=np.float64),
+            p["v_des"],
+            p["k_v"],
+            p["k_lat"],
+            p["a_max"],
+        )
+
+    def right_hand_active(self, world):
+        return np.zeros(world.n, dtype=bool)
+
+    def at_goal(self, positions, goals):
+        return positions[:, 1] >= self.params["finish_y"]
+
+
+class Crowd(Scenario):
+    """N agents with seeded random starts and goals in a square: the stress and scaling case."""
+
+    name = "crowd"
+    defaults = {
+        "num_agents": 12,
+        "safety_radius": 1.0,
+        "u_max": 2.0,
+        "k": 2.0,
+        "gamma": 10.0,
+        "rh_angle_deg": 30.0,
+        "rh_trigger_factor": 1.5,
+        "spacing_factor": 1.2,
+        "side_factor": 2.5,
+        "max_steps": 2000,
+    }
+
+    @property
+    def rh_trigger(self) -> float:
+        return self.params["rh_trigger_factor"] * self.params["safety_radius"]
+
+    @property
+    def side(self) -> float:
+        return self.params["side_factor"] * np.sqrt(self.num_agents) * self.params["safety_radius"]
+
+    def _spread(self, rng: np.random.Generator) -> NDArray[np.float64]:
+        """N points uniform in the square, pairwise >= spacing apart (dart throwing in batches)."""
+        n, side = self.num_agents, self.side
+        spacing = self.params["spacing_factor"] * self.params["safety_radius"]
+        pts = np.empty((0, 2))
+        for _ in range(10000):
+            cand = rng.uniform(-side / 2, side / 2, (max(2 * (n - len(pts)), 8), 2))
+            for c in cand:  # sequential acceptance keeps the draw a pure function of the seed
+                if len(pts) == n:
+                    break
+                if len(pts) == 0 or np.min(np.sum((pts - c) ** 2, axis=1)) >= spacing**2:
+                    pts = np.vstack([pts, c])
+            if len(pts) == n:
+                return pts
+        raise ValueError(
+            f"crowd: could not place {n} agents {spacing} apart in a square of side {side:.3g}; "
+            "raise side_factor or lower spacing_factor"
+        )
+
+    def initial_state(self, rng):
+        start = self._spread(rng)
+        goals = self._spread(rng)
+        return start, np.zeros_like(start), goals
+
+    def arena(self):
+        h = self.side / 2 + self.params["safety_radius"]
+        return np.array([-h, -h]), np.array([h, h])
+
+
+SCENARIOS: dict[str, type[Scenario]] = {
+    cls.name: cls for cls in (PositionSwap, CircularSwap, RampMerge, Crowd)
+}
+
+
+def make_scenario(scenario: str | Scenario, **kwargs: Any) -> Scenario:
+    """A scenario by name (``position_swap``, ``circular_swap``, ``ramp_merge``, ``crowd``)."""
+    if isinstance(scenario, Scenario):
+        if kwargs:
+            raise TypeError("keyword arguments go to the scenario's constructor, not here")
+        return scenario
+    if scenario not in SCENARIOS:
+        raise ValueError(f"unknown scenario {scenario!r}; use one of {sorted(SCENARIOS)}")
+    return SCENARIOS[scenario](**kwargs)

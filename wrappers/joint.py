@@ -1,0 +1,98 @@
+"""JointControlEnv: all agents as one ``gymnasium.Env`` (one Box action, one Box observation).
+
+This is what ``gymnasium.make("rsvo/CircularSwap-v0")`` returns: the filtered ParallelEnv seen
+by a single controller. Reward: the sum over agents; terminated when all agents are at their
+goals; truncated at ``max_steps``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium
+import numpy as np
+
+from wrappers.safety_filter import filtered_parallel_env
+
+
+class JointControlEnv(gymnasium.Env):
+    """Action: ``Box(-1, 1, (2 N,))``, agent i's action at ``[2 i, 2 i + 2)``. Observation: the
+    agents' observations concatenated in ``possible_agents`` order."""
+
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 50}
+
+    def __init__(
+        self,
+        scenario: str = "circular_swap",
+        safety_filter: bool = True,
+        render_mode: str | None = None,
+        **kwargs: Any,
+    ) -> None:
+        self.parallel = filtered_parallel_env(
+            scenario, safety_filter=safety_filter, render_mode=render_mode, **kwargs
+        )
+        base = self.parallel.unwrapped
+        self.base = base
+        self.render_mode = render_mode
+        self.agent_names = list(base.possible_agents)
+        n = len(self.agent_names)
+        obs_spaces = [base.observation_space(a) for a in self.agent_names]
+        self.observation_space = gymnasium.spaces.Box(
+            np.concatenate([s.low for s in obs_spaces]),
+            np.concatenate([s.high for s in obs_spaces]),
+            dtype=np.float32,
+        )
+        self.action_space = gymnasium.spaces.Box(-1.0, 1.0, (2 * n,), dtype=np.float32)
+
+    def _flat(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        return np.concatenate([obs[a] for a in self.agent_names]).astype(np.float32)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        if seed is None and not hasattr(self, "_seeded"):
+            # draw the episode seeds from gymnasium's own seeded generator, never a global one
+            seed = int(self.np_random.integers(2**31))
+        self._seeded = True
+        obs, infos = self.parallel.reset(seed=seed, options=options)
+        return self._flat(obs), {"agents": infos}
+
+    def step(self, action: Any):
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != self.action_space.shape:
+            raise ValueError(
+                f"action has shape {a.shape}, expected {self.action_space.shape} "
+                f"(2 values for each of {len(self.agent_names)} agents)"
+            )
+        per_agent = a.reshape(-1, 2)
+        bad = ~np.isfinite(per_agent).all(axis=1)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise ValueError(
+                f"action of agent {self.agent_names[i]!r} (index {i}) = "
+                f"{per_agent[i].tolist()} is not finite"
+            )
+        actions = {name: per_agent[i] for i, name in enumerate(self.agent_names)}
+        obs, rewards, terms, truncs, infos = self.parallel.step(actions)
+        reward = float(sum(rewards.values()))
+        terminated = all(terms.values())
+        truncated = (not terminated) and any(truncs.values())
+        first = infos[self.agent_names[0]]
+        info: dict[str, Any] = {
+            "agents": infos,
+            "cost": float(sum(i["cost"] for i in infos.values())),
+            "min_distance": float(min(i["min_distance"] for i in infos.values())),
+        }
+        if "episode" in first:
+            info["episode_metrics"] = first["episode"]
+        return self._flat(obs), reward, terminated, truncated, info
+
+    def nominal_action(self) -> np.ndarray:
+        """The scripted controller's joint action for the current state."""
+        nominal = self.base.nominal_actions()
+        return np.concatenate([nominal[a] for a in self.agent_names]).astype(np.float32)
+
+    def render(self):
+        return self.parallel.render()
+
+    def close(self) -> None:
+        self.parallel.close()

@@ -1,0 +1,35 @@
+"""ResponsibilityWeighting: choose how pairs share responsibility (DESIGN.md section 2).
+
+The weighting lives in the world: this wrapper sets the base env's mode (and the current
+world's, if an episode is running), and the filter reads ``world.omega``, so the two wrappers
+stack in either order. A single episode can still pick another mode through
+``reset(options={"weighting": ...})``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from pettingzoo.utils import BaseParallelWrapper
+
+from rsvo_env.responsibility import Weighting, weight_matrix
+
+
+class ResponsibilityWeighting(BaseParallelWrapper):
+    """``mode``: ``"asymmetric"`` (the paper's R-SVO weights), ``"symmetric"`` (0.5 for every
+    pair) or a callable ``theta -> omega`` matrix (validated: entries in [0, 1], W + W.T = 1)."""
+
+    def __init__(self, env: Any, mode: Weighting = "asymmetric") -> None:
+        super().__init__(env)
+        base = env.unwrapped
+        weight_matrix(np.ones(len(base.possible_agents)), mode)  # fail now on a bad mode
+        self.mode = mode
+        base.weighting = mode
+        if base.world is not None:
+            base.world.set_weighting(mode)
+
+    def reset(self, seed: int | None = None, options: dict | None = None):
+        # Passed down as an option: the outermost weighting wrapper wins over inner ones, and an
+        # explicit per-episode option from the caller wins over every wrapper.
+        return self.env.reset(seed=seed, options={"weighting": self.mode, **(options or {})})
