@@ -1,0 +1,22 @@
+"""README's Python blocks run as written."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+README = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+BLOCKS = re.findall(r"```python\n(.*?)```", README, flags=re.S)
+
+
+def test_readme_has_the_quickstart():
+    quick = README.split("## Quickstart", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    lines = [ln for ln in quick.strip().splitlines() if ln.strip()]
+    assert len(lines) == 5
+    assert "gymnasium.make" in lines[1] and "reset" in lines[2]
+    assert "nominal_action" in lines[3] and "render" in lines[4]
+
+
+@pytest.mark.parametrize("index", range(len(BLOCKS)))
+def test_readme_block_runs(index, capsys):
+    exec(compile(BLOCKS[index], f"README.md block {index}", "exec"), {})

@@ -1,0 +1,223 @@
+"""The R-CBF filter wrapper, the weighting toggle and the joint-control env."""
+
+import numpy as np
+import pytest
+
+import rsvo_env
+import wrappers
+
+
+def filtered(name, **kwargs):
+    return wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, **kwargs))
+
+
+def run(env, seed=0, options=None, policy="nominal", rng=None, check=None):
+    env.reset(seed=seed, options=options)
+    infos = {}
+    while env.agents:
+        if policy == "nominal":
+            actions = env.unwrapped.nominal_actions()
+        else:
+            actions = {a: rng.uniform(-1, 1, 2).astype(np.float32) for a in env.agents}
+        _, _, _, _, infos = env.step(actions)
+        if check:
+            check(infos)
+    return next(iter(infos.values()))["episode"]
+
+
+@pytest.mark.parametrize("chunk", range(4))
+def test_crowds_rushing_the_centre_stay_safe(chunk):
+    """100 seeded crowd episodes of 30 agents (4 chunks of 25), all heading for the centre."""
+    for seed in range(25 * chunk, 25 * (chunk + 1)):
+        env = filtered("crowd", num_agents=30, max_steps=500)
+        env.reset(seed=seed)
+        base = env.unwrapped
+        R = base.world.safety_radius
+        while env.agents:
+            x = base.world.positions
+            to_centre = -x / np.maximum(np.linalg.norm(x, axis=1, keepdims=True), 1e-12)
+            actions = {a: to_centre[i].astype(np.float32) for i, a in enumerate(env.agents)}
+            _, _, _, _, infos = env.step(actions)
+            assert all(i["cost"] == 0.0 and i["feasible"] for i in infos.values()), seed
+        m = infos["agent_0"]["episode"]
+        assert m["min_distance"] >= R - 1e-9, (seed, m["min_distance"])
+        assert m["n_infeasible"] == 0 and m["n_collision_steps"] == 0
+
+
+@pytest.mark.parametrize("name", ["position_swap", "circular_swap", "crowd"])
+@pytest.mark.parametrize("policy", ["nominal", "random"])
+def test_paper_scenarios_stay_safe(name, policy):
+    env = filtered(name)
+    for seed in range(3):
+        m = run(env, seed=seed, policy=policy, rng=np.random.default_rng(seed))
+        R = env.unwrapped.world.safety_radius
+        assert m["min_distance"] >= R - 1e-9
+        assert m["n_infeasible"] == 0 and m["n_collision_steps"] == 0
+
+
+@pytest.mark.parametrize("policy", ["nominal", "random"])
+def test_ramp_merge_stays_safe(policy):
+    env = filtered("ramp_merge")
+    for theta in ([1.0, 1.0], [1.0, 4.0], [4.0, 1.0]):
+        m = run(env, options={"theta": theta}, policy=policy, rng=np.random.default_rng(1))
+        assert m["min_distance"] >= 5.0
+        assert m["n_infeasible"] == 0 and m["n_collision_steps"] == 0
+
+
+def test_info_fields_and_intervention_penalty():
+    plain = filtered("circular_swap")
+    penal = wrappers.RCBFSafetyFilter(
+        rsvo_env.parallel_env("circular_swap"), intervention_penalty=0.5
+    )
+    plain.reset(seed=0)
+    penal.reset(seed=0)
+    for _ in range(150):
+        _, r1, _, _, i1 = plain.step(plain.unwrapped.nominal_actions())
+        _, r2, _, _, i2 = penal.step(penal.unwrapped.nominal_actions())
+    info = i1["agent_0"]
+    for key in (
+        "u_nominal",
+        "u_safe",
+        "intervention",
+        "feasible",
+        "active_constraints",
+        "min_distance",
+        "cost",
+        "at_goal",
+    ):
+        assert key in info
+    assert info["intervention"] == pytest.approx(np.linalg.norm(info["u_safe"] - info["u_nominal"]))
+    assert any(i["intervention"] > 0.1 for i in i1.values())  # the filter is at work by now
+    for a in r1:
+        assert r2[a] == pytest.approx(r1[a] - 0.5 * i1[a]["intervention"] ** 2)
+    # the applied control is the safe one, not the nominal
+    np.testing.assert_allclose(info["u_applied"], info["u_safe"])
+
+
+def test_infeasible_steps_apply_least_violation_and_are_counted():
+    """Start two double-integrator vehicles inside the unsafe set (closing too fast to brake):
+    the QP is infeasible, the applied action is not the nominal, and the episode counts it."""
+    env = filtered("ramp_merge", v0=40.0, start_distance=12.0, max_steps=30)
+    env.reset(seed=0)
+    base = env.unwrapped
+    _, _, _, _, infos = env.step(base.nominal_actions())
+    assert not infos["agent_0"]["feasible"]
+    assert infos["agent_0"]["max_violation"] > 0
+    assert not np.allclose(infos["agent_0"]["u_safe"], infos["agent_0"]["u_nominal"])
+    while env.agents:
+        _, _, _, _, infos = env.step(base.nominal_actions())
+    assert infos["agent_0"]["episode"]["n_infeasible"] > 0
+
+
+# ---- symmetric vs asymmetric ----
+
+
+def distance_before_meeting(weighting):
+    """Path length of each agent up to the first step the right-hand rule fires."""
+    env = wrappers.ResponsibilityWeighting(filtered("position_swap"), weighting)
+    env.reset(seed=0, options={"theta": [1.0, 4.0]})
+    base = env.unwrapped
+    while env.agents and base.metrics.deadlock_onset is None:
+        env.step(base.nominal_actions())
+    hist = np.stack(base.history)
+    return np.linalg.norm(np.diff(hist, axis=0), axis=2).sum(axis=0)
+
+
+def test_egoist_travels_farther_before_meeting():
+    d = distance_before_meeting("asymmetric")
+    assert d[0] > d[1] * 1.05, d
+
+
+def test_symmetric_toggle_gives_equal_distances():
+    d = distance_before_meeting("symmetric")
+    assert abs(d[0] - d[1]) <= 1e-9, d
+
+
+@pytest.mark.parametrize("order", ["filter_outside", "weighting_outside"])
+def test_weighting_stacks_in_either_order(order):
+    def make(mode):
+        env = rsvo_env.parallel_env("circular_swap")
+        if order == "filter_outside":
+            return wrappers.RCBFSafetyFilter(wrappers.ResponsibilityWeighting(env, mode))
+        return wrappers.ResponsibilityWeighting(wrappers.RCBFSafetyFilter(env), mode)
+
+    theta = {"theta": [2, 1, 2, 1, 2, 1]}
+    sym = run(make("symmetric"), options=theta)
+    asym = run(make("asymmetric"), options=theta)
+    assert sym["completed"] != asym["completed"]
+    # the per-episode option overrides the wrapper's mode
+    forced = run(make("asymmetric"), options={**theta, "weighting": "symmetric"})
+    assert forced["completed"] == sym["completed"]
+
+
+def test_callable_weighting_is_validated():
+    env = rsvo_env.parallel_env("position_swap")
+    wrappers.ResponsibilityWeighting(env, lambda th: np.array([[0.0, 0.9], [0.1, 0.0]]))
+    env.reset(seed=0)
+    assert env.unwrapped.world.omega[0, 1] == 0.9
+    with pytest.raises(ValueError, match=r"omega\[0, 1\] \+ omega\[1, 0\] = 1"):
+        wrappers.ResponsibilityWeighting(env, lambda th: np.full((2, 2), 0.9))
+    with pytest.raises(ValueError, match="unknown"):
+        wrappers.ResponsibilityWeighting(env, "selfish")
+
+
+# ---- ramp merge ----
+
+
+def merge_order(theta, split="capability"):
+    env = filtered("ramp_merge", split=split)
+    env.reset(seed=0, options={"theta": theta})
+    base = env.unwrapped
+    passed = [None, None]
+    while env.agents:
+        _, _, _, _, infos = env.step(base.nominal_actions())
+        for i in range(2):
+            if passed[i] is None and base.world.positions[i, 1] >= 70.0:
+                passed[i] = base.metrics.steps
+    return passed, infos["agent_0"]["episode"]
+
+
+@pytest.mark.parametrize("theta,egoist", [([1.0, 4.0], 0), ([4.0, 1.0], 1)])
+def test_egoist_merges_first_with_capability_split(theta, egoist):
+    passed, m = merge_order(theta)
+    assert passed[egoist] < passed[1 - egoist], passed
+    assert m["n_infeasible"] == 0 and m["min_distance"] >= 5.0
+
+
+def test_equal_theta_keeps_the_safety_distance():
+    _, m = merge_order([2.0, 2.0])
+    assert m["min_distance"] >= 5.0 and m["n_infeasible"] == 0
+
+
+@pytest.mark.parametrize("theta,egoist", [([1.0, 4.0], 0), ([4.0, 1.0], 1)])
+def test_paper_split_makes_the_egoist_yield(theta, egoist):
+    passed, _ = merge_order(theta, split="paper")
+    assert passed[egoist] > passed[1 - egoist], passed
+
+
+# ---- joint control ----
+
+
+def test_joint_control_env_sums_and_ends_together():
+    env = wrappers.JointControlEnv("position_swap")
+    obs, info = env.reset(seed=0)
+    assert obs.shape == env.observation_space.shape
+    total, done = 0.0, False
+    while not done:
+        obs, r, term, trunc, info = env.step(env.nominal_action())
+        total += r
+        done = term or trunc
+    assert term and not trunc
+    assert info["episode_metrics"]["success"]
+    assert total > 2 * 10.0  # both goal bonuses
+
+
+def test_joint_control_bad_action():
+    env = wrappers.JointControlEnv("circular_swap")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"shape \(3,\), expected \(12,\)"):
+        env.step(np.zeros(3))
+    a = np.zeros(12)
+    a[5] = np.nan
+    with pytest.raises(ValueError, match=r"agent 'agent_2' \(index 2\) = \[0.0, nan\]"):
+        env.step(a)
