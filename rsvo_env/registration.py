@@ -19,27 +19,19 @@ IDS = {
 
 def register_all() -> None:
     for env_id, scenario in IDS.items():
+        kwargs = {"scenario": scenario}
         if env_id not in gymnasium.registry:
             gymnasium.register(
-                id=env_id,
-                entry_point="wrappers.joint:JointControlEnv",
-                kwargs={"scenario": scenario},
-                disable_env_checker=False,
+                id=env_id, entry_point="wrappers.joint:JointControlEnv", kwargs=kwargs
             )
-        if env_id not in pettingzoo.parallel_registry:
-            pettingzoo.register(
-                "parallel",
-                env_id,
-                "wrappers.safety_filter:filtered_parallel_env",
-                kwargs={"scenario": scenario},
-            )
-        if env_id not in pettingzoo.aec_registry:
-            pettingzoo.register(
-                "aec",
-                env_id,
-                "wrappers.safety_filter:filtered_aec_env",
-                kwargs={"scenario": scenario},
-            )
+        for env_type, registry, factory in (
+            ("parallel", pettingzoo.parallel_registry, "filtered_parallel_env"),
+            ("aec", pettingzoo.aec_registry, "filtered_aec_env"),
+        ):
+            if env_id not in registry:
+                pettingzoo.register(
+                    env_type, env_id, f"wrappers.safety_filter:{factory}", kwargs=dict(kwargs)
+                )
 
 
 register_all()

@@ -114,6 +114,18 @@ def validate_weight_matrix(w: NDArray[np.float64], n: int) -> NDArray[np.float64
     return w
 
 
+def theta_for_weight(omega: float) -> tuple[float, float]:
+    """Scores (theta_i, theta_j), summing to 1, that give agent i the weight ``omega``.
+
+    Inverts Thm. 1: ``omega = cos^2(pi/2 * share)`` gives ``share = acos(sqrt(omega)) / (pi/2)``.
+    The paper's position swap is stated in weights (0.8/0.2, 0.5/0.5, 0.2/0.8).
+    """
+    if not 0.0 <= omega <= 1.0:
+        raise ValueError(f"omega = {omega!r} must be in [0, 1]")
+    share = float(np.arccos(np.sqrt(omega)) / (np.pi / 2))
+    return share, 1.0 - share
+
+
 def min_pair_weight(theta: NDArray[np.float64], mode: Weighting) -> float:
     """Smallest omega over all pairs, in O(N): the most altruistic agent against the most egoistic.
 

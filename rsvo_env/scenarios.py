@@ -117,6 +117,9 @@ class Scenario:
 
     @property
     def rh_trigger(self) -> float:
+        """Distance under which the right-hand rule fires: given, or a multiple of R."""
+        if "rh_trigger_factor" in self.params:
+            return self.params["rh_trigger_factor"] * self.params["safety_radius"]
         return float(self.params["rh_trigger"])
 
     def at_goal(self, positions: NDArray, goals: NDArray) -> NDArray[np.bool_]:
@@ -138,10 +141,6 @@ class PositionSwap(Scenario):
         "rh_trigger_factor": 1.5,
         "max_steps": 1500,
     }
-
-    @property
-    def rh_trigger(self) -> float:
-        return self.params["rh_trigger_factor"] * self.params["safety_radius"]
 
     def initial_state(self, rng):
         start = np.array(self.params["start"], dtype=np.float64)
@@ -263,10 +262,6 @@ class Crowd(Scenario):
         "side_factor": 2.5,
         "max_steps": 2000,
     }
-
-    @property
-    def rh_trigger(self) -> float:
-        return self.params["rh_trigger_factor"] * self.params["safety_radius"]
 
     @property
     def side(self) -> float:
