@@ -141,19 +141,19 @@ class RSVOParallelEnv(ParallelEnv):
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, NDArray[np.float32]], dict[str, dict[str, Any]]]:
-        if seed is not None or self._np_random is None:
-            self._np_random, _ = seeding.np_random(seed)
         # Other keys are left for wrappers (PettingZoo's own API test passes one of its own).
         options = dict(options or {})
         sc = self.scenario
+        # Options are checked before any draw, so a refused reset leaves the generator as it was.
+        theta = sc.check_theta(options["theta"]) if "theta" in options else None
+        weighting = options.get("weighting", self.weighting)
+        weight_matrix(np.ones(sc.num_agents) if theta is None else theta, weighting)
+        if seed is not None or self._np_random is None:
+            self._np_random, _ = seeding.np_random(seed)
         start, vel, goals = sc.initial_state(self._np_random)
         self._check_start(start)
-        theta = (
-            sc.check_theta(options["theta"])
-            if "theta" in options
-            else sc.default_theta(self._np_random)
-        )
-        weighting = options.get("weighting", self.weighting)
+        if theta is None:
+            theta = sc.default_theta(self._np_random)
         p = sc.params
         self.world = World(
             positions=start.copy(),

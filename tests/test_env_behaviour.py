@@ -248,3 +248,19 @@ def test_step_after_end_and_before_reset():
     assert env.agents == []
     with pytest.raises(RuntimeError, match="episode is over"):
         env.step({})
+
+
+def test_refused_reset_leaves_the_generator_as_it_was():
+    env, clean = (
+        rsvo_env.parallel_env("crowd", num_agents=6),
+        rsvo_env.parallel_env("crowd", num_agents=6),
+    )
+    env.reset(seed=4)
+    clean.reset(seed=4)
+    with pytest.raises(ValueError, match=r"theta\[0\] = -1.0"):
+        env.reset(options={"theta": [-1, 1, 1, 1, 1, 1]})
+    with pytest.raises(ValueError, match="unknown"):
+        env.reset(options={"weighting": "selfish"})
+    env.reset()
+    clean.reset()
+    np.testing.assert_array_equal(env.unwrapped.world.positions, clean.unwrapped.world.positions)

@@ -221,3 +221,26 @@ def test_joint_control_bad_action():
     a[5] = np.nan
     with pytest.raises(ValueError, match=r"agent 'agent_2' \(index 2\) = \[0.0, nan\]"):
         env.step(a)
+
+
+def test_a_refused_inner_step_leaves_no_safe_controls_behind():
+    from pettingzoo.utils import BaseParallelWrapper
+
+    class RefuseOnce(BaseParallelWrapper):
+        refused = False
+
+        def step(self, actions):
+            if not self.refused:
+                self.refused = True
+                raise RuntimeError("no")
+            return super().step(actions)
+
+    inner = RefuseOnce(rsvo_env.parallel_env("circular_swap"))
+    env = wrappers.RCBFSafetyFilter(inner)
+    env.reset(seed=0)
+    with pytest.raises(RuntimeError, match="no"):
+        env.step(env.unwrapped.nominal_actions())
+    # stepping the bare env now applies its own actions, not the filter's leftovers
+    zero = {a: np.zeros(2, dtype=np.float32) for a in env.agents}
+    _, _, _, _, infos = inner.step(zero)
+    np.testing.assert_array_equal(infos["agent_0"]["u_applied"], [0.0, 0.0])

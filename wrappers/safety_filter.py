@@ -86,7 +86,11 @@ class RCBFSafetyFilter(BaseParallelWrapper):
             },
         )
         self.last_result = res
-        obs, rewards, terms, truncs, infos = self.env.step(actions)
+        try:
+            obs, rewards, terms, truncs, infos = self.env.step(actions)
+        finally:
+            # a wrapper in between that refuses the step must not leave these for a later one
+            base._next_controls = None
         for i, agent in enumerate(base.possible_agents):
             if agent not in infos:
                 continue
