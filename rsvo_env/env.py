@@ -280,18 +280,28 @@ class RSVOParallelEnv(ParallelEnv):
         cost = nearest < w.safety_radius - 1e-9
         agents = self.agents
         obs = self._observe()
-        rewards = {a: float(reward[i]) for i, a in enumerate(agents)}
+        rewards = dict(zip(agents, reward.tolist(), strict=True))
         terms = {a: terminated for a in agents}
         truncs = {a: truncated for a in agents}
+        u_applied = applied.copy()  # one copy a step; each agent's entry is a row of it
         infos = {
             a: {
-                "min_distance": float(nearest[i]),
-                "cost": float(cost[i]),
-                "at_goal": bool(at_goal[i]),
-                "rh_active": bool(rh[i]),
-                "u_applied": applied[i].copy(),
+                "min_distance": d,
+                "cost": c,
+                "at_goal": g,
+                "rh_active": r,
+                "u_applied": u_applied[i],
             }
-            for i, a in enumerate(agents)
+            for i, (a, d, c, g, r) in enumerate(
+                zip(
+                    agents,
+                    nearest.tolist(),
+                    cost.astype(float).tolist(),
+                    at_goal.tolist(),
+                    rh.tolist(),
+                    strict=True,
+                )
+            )
         }
         if terminated or truncated:
             summary = self.metrics.summary()

@@ -91,19 +91,24 @@ class RCBFSafetyFilter(BaseParallelWrapper):
         finally:
             # a wrapper in between that refuses the step must not leave these for a later one
             base._next_controls = None
+        # One copy per field and step; each agent's entry is a row of it.
+        u_nom, u_safe = u_nominal.copy(), res.actions.copy()
+        interventions = res.intervention.tolist()
+        feasible, active = res.feasible.tolist(), res.active.tolist()
+        violation = res.max_violation.tolist()
         for i, agent in enumerate(base.possible_agents):
             if agent not in infos:
                 continue
             infos[agent].update(
-                u_nominal=u_nominal[i].copy(),
-                u_safe=res.actions[i].copy(),
-                intervention=float(res.intervention[i]),
-                feasible=bool(res.feasible[i]),
-                active_constraints=int(res.active[i]),
-                max_violation=float(res.max_violation[i]),
+                u_nominal=u_nom[i],
+                u_safe=u_safe[i],
+                intervention=interventions[i],
+                feasible=feasible[i],
+                active_constraints=active[i],
+                max_violation=violation[i],
             )
             if self.intervention_penalty and agent in rewards:
-                rewards[agent] -= self.intervention_penalty * float(res.intervention[i]) ** 2
+                rewards[agent] -= self.intervention_penalty * interventions[i] ** 2
         return obs, rewards, terms, truncs, infos
 
 
