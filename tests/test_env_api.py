@@ -30,10 +30,13 @@ def test_pettingzoo_api(name, kwargs, filtered):
     api_test(parallel_to_aec(make(name, kwargs, filtered)), num_cycles=400)
 
 
+@pytest.mark.parametrize("filtered", [False, True], ids=["bare", "filtered"])
 @pytest.mark.parametrize("name,kwargs", CASES, ids=IDS)
-def test_render_api(name, kwargs):
+def test_render_api(name, kwargs, filtered):
     render_test(
-        lambda render_mode=None: parallel_to_aec(make(name, kwargs, True, render_mode=render_mode))
+        lambda render_mode=None: parallel_to_aec(
+            make(name, kwargs, filtered, render_mode=render_mode)
+        )
     )
 
 
