@@ -20,9 +20,10 @@ from numba import njit
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from rsvo_env.neighbors import DENSE_MAX_AGENTS
+
 BARRIERS = ("braking", "hocbf")
 SPLITS = ("capability", "sign_aware", "paper")
-from rsvo_env.neighbors import DENSE_MAX_AGENTS as DENSE_PAIRS_MAX_AGENTS  # noqa: E402
 
 
 @dataclass(frozen=True)
@@ -100,7 +101,7 @@ def candidate_pairs(
     if n < 2:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
-    if not np.isfinite(radius) or n <= DENSE_PAIRS_MAX_AGENTS:
+    if not np.isfinite(radius) or n <= DENSE_MAX_AGENTS:
         I, J = all_pairs(n)
         if np.isfinite(radius):
             d = np.linalg.norm(positions[I] - positions[J], axis=1)

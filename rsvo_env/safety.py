@@ -16,6 +16,7 @@ import qpsolvers
 from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env import barriers, solvers
+from rsvo_env.neighbors import DENSE_MAX_AGENTS
 from rsvo_env.responsibility import (
     WEIGHTING_MODES,
     Weighting,
@@ -219,7 +220,7 @@ class SafetyFilter:
                 off = ~np.eye(n, dtype=bool)
                 self._omega_min = float(W[off].min()) if n > 1 else 0.5
                 self._omega_in, self._omega_ok = omega, W
-        dense = n <= barriers.DENSE_PAIRS_MAX_AGENTS and cfg.neighbor_radius is None
+        dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
         if dense:
             # Few agents: every pair, and exact culling drops the rows that cannot bind.
             I, J = barriers.all_pairs(n)

@@ -98,7 +98,7 @@ def _project(nx, ny, rows, nrows, shift, lo0, lo1, hi0, hi1):
 
 
 @njit(cache=True, inline="always")
-def _max_violation(ux, uy, rows, nrows, lo0, lo1, hi0, hi1):
+def _max_violation(ux, uy, rows, nrows):
     worst = -np.inf
     for k in range(nrows):
         v = rows[k, 0] * ux + rows[k, 1] * uy - rows[k, 2]
@@ -133,13 +133,11 @@ def _solve_one(nom, A, b, mask, lo, hi, rows, out):
         # Least violation: the smallest shift t of every row that makes the polygon non-empty.
         cx = min(max(nx, lo0), hi0)
         cy = min(max(ny, lo1), hi1)
-        t_hi = max(_max_violation(cx, cy, rows, nrows, lo0, lo1, hi0, hi1), 0.0)
+        t_hi = max(_max_violation(cx, cy, rows, nrows), 0.0)
         # Even the box corners cannot do better than the best corner; start there when smaller.
         for cx2 in (lo0, hi0):
             for cy2 in (lo1, hi1):
-                t_hi = min(
-                    t_hi, max(_max_violation(cx2, cy2, rows, nrows, lo0, lo1, hi0, hi1), 0.0)
-                )
+                t_hi = min(t_hi, max(_max_violation(cx2, cy2, rows, nrows), 0.0))
         t_lo = 0.0
         for _ in range(200):
             if t_hi - t_lo <= 1e-13 * (1.0 + t_hi):
@@ -151,7 +149,7 @@ def _solve_one(nom, A, b, mask, lo, hi, rows, out):
             else:
                 t_lo = mid
         ux, uy, feas = _project(nx, ny, rows, nrows, t_hi, lo0, lo1, hi0, hi1)
-        violation = max(_max_violation(ux, uy, rows, nrows, lo0, lo1, hi0, hi1), 0.0)
+        violation = max(_max_violation(ux, uy, rows, nrows), 0.0)
         if violation <= FEASIBILITY_TOL:
             ok = True
             violation = 0.0
