@@ -2,12 +2,14 @@
 
 Every unordered pair (i, j) gives one row to each of its agents, ``A_i u_i <= b_i`` and
 ``A_j u_j <= b_j``, whose sum is the centralized CBF condition of the pair. Rows are returned
-padded to a fixed width K with a mask, agents along axis 0 (DESIGN.md section 1).
+padded to a fixed width K with a mask, agents along axis 0. A batch of E envs is one flat set of
+E * N agents: agent ``e * N + i`` is agent i of env e, and pairs never cross envs.
 
 * Single integrator (paper, eq. ``qp``): ``A_i = -2 (x_i - x_j)``, ``b_i = omega_ij gamma h_ij``,
   ``h_ij = |x_i - x_j|^2 - R^2``.
-* Double integrator (DESIGN.md section 3): one pair row ``c (-dp.a_i + dp.a_j) <= RHS`` split into
-  ``-c dp.a_i <= s_ij`` and ``c dp.a_j <= s_ji`` with ``s_ij + s_ji = RHS``.
+* Double integrator (``docs/double_integrator.md``): one pair row
+  ``c (-dp.a_i + dp.a_j) <= RHS`` split into ``-c dp.a_i <= s_ij`` and ``c dp.a_j <= s_ji``
+  with ``s_ij + s_ji = RHS``.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from numba import njit
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from rsvo_env.neighbors import DENSE_MAX_AGENTS
+from rsvo_env.neighbors import DENSE_MAX_AGENTS, env_offsets
 
 BARRIERS = ("braking", "hocbf")
 SPLITS = ("capability", "sign_aware", "paper")
@@ -31,10 +33,8 @@ class Rows:
     """Padded constraint rows: agent i's rows are ``A[i, k] . u <= b[i, k]`` where ``mask[i, k]``.
 
     ``neighbor[i, k]`` is the other agent of the row (-1 on padding), ``h[i, k]`` the pair's
-    barrier value. ``min_h`` is the smallest barrier value over the pairs examined (all pairs,
-    or for the single integrator at large N, the pairs that the nearest-neighbour search finds,
-    which always include the closest one). Double-integrator diagnostics: ``unrecoverable``
-    and ``capped`` per row; ``n_unrecoverable_pairs``, ``n_capped_shares`` per call.
+    barrier value; ``pair_h`` holds the barrier value of every pair examined, culled or not, in
+    pair order. Double-integrator diagnostics: ``unrecoverable`` and ``capped`` per row.
     """
 
     A: NDArray[np.float64]
@@ -42,19 +42,11 @@ class Rows:
     mask: NDArray[np.bool_]
     neighbor: NDArray[np.int64]
     h: NDArray[np.float64]
-    min_h: float
+    pair_h: NDArray[np.float64]
     unrecoverable: NDArray[np.bool_]
     capped: NDArray[np.bool_]
     n_pairs: int
     n_culled: int
-
-    @property
-    def n_unrecoverable_pairs(self) -> int:
-        return int(self.unrecoverable.sum()) // 2
-
-    @property
-    def n_capped_shares(self) -> int:
-        return int(self.capped.sum())
 
 
 def box_support(A: NDArray, lo: NDArray, hi: NDArray) -> NDArray:
@@ -65,7 +57,7 @@ def box_support(A: NDArray, lo: NDArray, hi: NDArray) -> NDArray:
 def sensing_radius(
     omega_min: float, gamma: float, safety_radius: float, lo: NDArray, hi: NDArray
 ) -> float:
-    """Distance beyond which no single-integrator row can bind (DESIGN.md section 3).
+    """Distance beyond which no single-integrator row can bind (``docs/math.md``).
 
     A row cannot bind when ``omega gamma (d^2 - R^2) >= max_box A u``; the right side is at most
     ``2 d |U|`` with ``U`` the per-component speed bound, so the root of
@@ -80,50 +72,44 @@ def sensing_radius(
 
 
 @functools.lru_cache(maxsize=64)
-def _triu(n: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+def all_pairs(n: int, num_envs: int = 1) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Every unordered pair (I < J) of n agents in each of ``num_envs`` envs, as flat agent
+    indices ``e * n + i``, env by env in a fixed order (read-only arrays, cached)."""
     I, J = np.triu_indices(n, 1)
-    I, J = I.astype(np.int64), J.astype(np.int64)
+    base = (n * np.arange(num_envs, dtype=np.int64))[:, None]
+    I, J = (base + I).ravel(), (base + J).ravel()
     I.flags.writeable = False
     J.flags.writeable = False
     return I, J
 
 
-def all_pairs(n: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Every unordered pair (I < J) of n agents, in a fixed order."""
-    return _triu(n)
-
-
 def candidate_pairs(
     positions: NDArray, radius: float = float("inf")
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Unordered pairs (I < J) that may interact: all pairs, or those within ``radius``."""
-    n = positions.shape[0]
+    """Pairs (I < J, flat indices) of agents of the same env that may interact: all pairs, or
+    those within ``radius``. ``positions`` is (E, N, 2); one KD-tree serves every env."""
+    E, n = positions.shape[0], positions.shape[1]
     if n < 2:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
+    flat = positions.reshape(-1, 2)
     if not np.isfinite(radius) or n <= DENSE_MAX_AGENTS:
-        I, J = all_pairs(n)
+        I, J = all_pairs(n, E)
         if np.isfinite(radius):
-            d = np.linalg.norm(positions[I] - positions[J], axis=1)
+            d = np.linalg.norm(flat[I] - flat[J], axis=1)
             keep = d <= radius
             I, J = I[keep], J[keep]
         return I, J
-    pairs = cKDTree(positions).query_pairs(radius, output_type="ndarray")
+    shifted = (positions + env_offsets(positions, radius)).reshape(-1, 2)
+    pairs = cKDTree(shifted).query_pairs(radius, output_type="ndarray")
     if len(pairs) == 0:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
+    pairs = np.sort(pairs, axis=1)
     # A fixed pair order keeps results bit-identical whatever order the tree returns.
     order = np.lexsort((pairs[:, 1], pairs[:, 0]))
     pairs = pairs[order]
     return pairs[:, 0].astype(np.int64), pairs[:, 1].astype(np.int64)
-
-
-def nearest_h(positions: NDArray, safety_radius: float) -> float:
-    """``min_ij |x_i - x_j|^2 - R^2`` in O(N log N)."""
-    if positions.shape[0] < 2:
-        return float("inf")
-    d, _ = cKDTree(positions).query(positions, k=2)
-    return float(d[:, 1].min() ** 2 - safety_radius**2)
 
 
 @njit(cache=True)
@@ -197,12 +183,11 @@ def _finish(
     exists: NDArray,
     unrecoverable: NDArray,
     capped: NDArray,
-    min_h: float,
     cull: bool = True,
 ) -> Rows:
     """Both agents' rows of each pair, exact culling, packing.
 
-    Culling (DESIGN.md section 3): a row whose right side is at least the largest value its left
+    Culling (``docs/math.md``): a row whose right side is at least the largest value its left
     side takes over the box cannot bind anywhere in the box, so dropping it changes no solution.
     """
     A_pad, b_pad, mask, nb, h_pad, unrec_pad, cap_pad, kept = _pack(
@@ -227,7 +212,7 @@ def _finish(
         mask=mask,
         neighbor=nb,
         h=h_pad,
-        min_h=min_h,
+        pair_h=h,
         unrecoverable=unrec_pad,
         capped=cap_pad,
         n_pairs=len(I),
@@ -244,7 +229,6 @@ def single_integrator_rows(
     safety_radius: float,
     lo: NDArray,
     hi: NDArray,
-    min_h: float | None = None,
     cull: bool = True,
 ) -> Rows:
     """Rows of the paper's QP (eq. ``qp``, Thm. 1) for the pairs (I, J).
@@ -259,9 +243,7 @@ def single_integrator_rows(
     b_i = omega_pairs[:, 0] * gamma * h
     b_j = omega_pairs[:, 1] * gamma * h
     none = np.zeros(len(I), dtype=bool)
-    if min_h is None:
-        min_h = float(h.min()) if len(h) else float("inf")
-    return _finish(n, I, J, A_i, b_i, b_j, h, lo, hi, ~none, none, none, min_h, cull)
+    return _finish(n, I, J, A_i, b_i, b_j, h, lo, hi, ~none, none, none, cull)
 
 
 def double_integrator_rows(
@@ -280,7 +262,7 @@ def double_integrator_rows(
     dt: float | None = None,
     cull: bool = True,
 ) -> Rows:
-    """Rows for the double integrator (DESIGN.md section 3).
+    """Rows for the double integrator (``docs/double_integrator.md``).
 
     ``barrier="braking"``: ``h = |dp| - Ds - max(0, -q)^2 / (2 A)`` with ``A = 2 a_max`` and
     ``q = dp.dv/|dp|``; ``c = 1``; while closing (``q < 0``)
@@ -349,5 +331,4 @@ def double_integrator_rows(
             capped = exists & ~unrecoverable & (clipped != s_i)
             s_i = np.where(unrecoverable, 0.5 * finite_rhs, clipped)
     s_j = finite_rhs - s_i
-    min_h = float(h.min()) if len(h) else float("inf")
-    return _finish(n, I, J, A_i, s_i, s_j, h, lo, hi, exists, unrecoverable, capped, min_h, cull)
+    return _finish(n, I, J, A_i, s_i, s_j, h, lo, hi, exists, unrecoverable, capped, cull)

@@ -1,4 +1,4 @@
-"""Episode metrics (DESIGN.md section 6), counted in steps.
+"""Episode metrics (``docs/metrics.md``), counted in steps, for E envs at once.
 
 * deadlock onset: first step the right-hand rule fires for any agent;
 * deadlock resolved: first step every agent has passed the midpoint of its start-goal segment;
@@ -10,7 +10,6 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -22,14 +21,14 @@ def passed_midpoint(
 ) -> NDArray[np.bool_]:
     """Agents whose projection on their start-goal segment is past its middle."""
     seg = goals - starts
-    progress = np.einsum("ij,ij->i", positions - starts, seg)
-    return progress >= 0.5 * np.einsum("ij,ij->i", seg, seg)
+    progress = np.einsum("...j,...j->...", positions - starts, seg)
+    return progress >= 0.5 * np.einsum("...j,...j->...", seg, seg)
 
 
 def resolution_gain(
     onset_sym: int, resolved_sym: int, onset_asym: int, resolved_asym: int
 ) -> float:
-    """``1 - (resolved - onset)_asym / (resolved - onset)_sym`` (DESIGN.md section 6)."""
+    """``1 - (resolved - onset)_asym / (resolved - onset)_sym``."""
     return 1.0 - (resolved_asym - onset_asym) / (resolved_sym - onset_sym)
 
 
@@ -38,38 +37,76 @@ def completion_gain(completed_sym: int, completed_asym: int) -> float:
     return 1.0 - completed_asym / completed_sym
 
 
-def _first(step: int | None, condition: bool, t: int) -> int | None:
-    return t if step is None and condition else step
+# Relative margin of the collision test: a distance below R (1 - COLLISION_TOL) is a collision,
+# so an exactly safe step that rounds a few ulps below R does not count, in any units.
+COLLISION_TOL = 1e-9
+
+# Per-env counters reported in step infos under "episode_<name>" (flat, same keys every step).
+FLAT_FIELDS = (
+    ("steps", np.int64),
+    ("success", np.bool_),
+    ("completed", np.int64),
+    ("min_distance", np.float64),
+    ("collision_steps", np.int64),
+    ("infeasible", np.int64),
+)
 
 
-@dataclass
+def collided(distance: NDArray[np.float64], safety_radius: float) -> NDArray[np.bool_]:
+    """Distances below the safety radius, less the relative round-off margin."""
+    return distance < safety_radius * (1.0 - COLLISION_TOL)
+
+
 class EpisodeMetrics:
-    """Accumulates one episode, step by step, without keeping more than per-agent sums and the
-    per-step series the paper plots."""
+    """Accumulates the running episode of each of E envs in (E,) and (E, N) arrays, without
+    keeping more than per-agent sums; with ``record_series`` (one env only) also the per-step
+    series the paper plots. Steps without an event keep -1 (``None`` in :meth:`summary`)."""
 
-    n: int
-    dt: float
-    safety_radius: float
-    steps: int = 0
-    deadlock_onset: int | None = None
-    deadlock_resolved: int | None = None
-    completed: int | None = None
-    min_distance: float = float("inf")
-    n_collision_steps: int = 0
-    n_infeasible: int = 0
-    n_unrecoverable_pairs: int = 0
-    n_capped_shares: int = 0
-    min_barrier: float = float("inf")
-    path_length: NDArray[np.float64] = field(init=False)
-    deviation: NDArray[np.float64] = field(init=False)
-    arrival: NDArray[np.int64] = field(init=False)
-    min_distance_series: list[float] = field(default_factory=list)
-    avg_min_distance_series: list[float] = field(default_factory=list)
+    def __init__(
+        self, num_envs: int, n: int, dt: float, safety_radius: float, record_series: bool = False
+    ) -> None:
+        if record_series and num_envs != 1:
+            raise ValueError("record_series needs num_envs = 1")
+        self.num_envs, self.n, self.dt, self.safety_radius = num_envs, n, dt, safety_radius
+        self.record_series = record_series
+        E = num_envs
+        self.steps = np.zeros(E, dtype=np.int64)
+        self.deadlock_onset = np.full(E, -1, dtype=np.int64)
+        self.deadlock_resolved = np.full(E, -1, dtype=np.int64)
+        self.completed = np.full(E, -1, dtype=np.int64)
+        self.min_distance = np.full(E, np.inf)
+        self.collision_steps = np.zeros(E, dtype=np.int64)
+        self.infeasible = np.zeros(E, dtype=np.int64)
+        self.unrecoverable_pairs = np.zeros(E, dtype=np.int64)
+        self.capped_shares = np.zeros(E, dtype=np.int64)
+        self.min_barrier = np.full(E, np.inf)
+        self.path_length = np.zeros((E, n))
+        self.deviation = np.zeros((E, n))
+        self.arrival = np.full((E, n), -1, dtype=np.int64)
+        self.min_distance_series: list[float] = []
+        self.avg_min_distance_series: list[float] = []
 
-    def __post_init__(self) -> None:
-        self.path_length = np.zeros(self.n)
-        self.deviation = np.zeros(self.n)
-        self.arrival = np.full(self.n, -1, dtype=np.int64)
+    def reset(self, envs: NDArray[np.int64]) -> None:
+        """Start a new episode in the given envs."""
+        for name, value in (
+            ("steps", 0),
+            ("deadlock_onset", -1),
+            ("deadlock_resolved", -1),
+            ("completed", -1),
+            ("min_distance", np.inf),
+            ("collision_steps", 0),
+            ("infeasible", 0),
+            ("unrecoverable_pairs", 0),
+            ("capped_shares", 0),
+            ("min_barrier", np.inf),
+            ("path_length", 0.0),
+            ("deviation", 0.0),
+            ("arrival", -1),
+        ):
+            getattr(self, name)[envs] = value
+        if self.record_series:
+            self.min_distance_series.clear()
+            self.avg_min_distance_series.clear()
 
     def update(
         self,
@@ -82,43 +119,66 @@ class EpisodeMetrics:
         applied: NDArray[np.float64],
         filter_stats: dict[str, Any] | None = None,
     ) -> None:
-        """Record the state after one more step."""
+        """Record the state after one more step of every env (arrays (E, N, ...))."""
         self.steps += 1
         t = self.steps
-        self.path_length += np.linalg.norm(displacement, axis=1)
-        self.deviation += np.linalg.norm(applied - requested, axis=1) * self.dt
-        step_min = float(nearest.min())
-        self.min_distance = min(self.min_distance, step_min)
-        self.min_distance_series.append(step_min)
-        self.avg_min_distance_series.append(float(nearest.mean()))
-        self.n_collision_steps += int(step_min < self.safety_radius - 1e-9)
-        self.deadlock_onset = _first(self.deadlock_onset, bool(rh_active.any()), t)
-        self.deadlock_resolved = _first(self.deadlock_resolved, bool(passed_mid.all()), t)
-        self.completed = _first(self.completed, bool(at_goal.all()), t)
-        self.arrival = np.where((self.arrival < 0) & at_goal, t, self.arrival)
+        self.path_length += np.linalg.norm(displacement, axis=-1)
+        self.deviation += np.linalg.norm(applied - requested, axis=-1) * self.dt
+        step_min = nearest.min(axis=-1)
+        np.minimum(self.min_distance, step_min, out=self.min_distance)
+        if self.record_series:
+            self.min_distance_series.append(float(step_min[0]))
+            self.avg_min_distance_series.append(float(nearest[0].mean()))
+        self.collision_steps += collided(step_min, self.safety_radius)
+        for name, condition in (
+            ("deadlock_onset", rh_active.any(axis=-1)),
+            ("deadlock_resolved", passed_mid.all(axis=-1)),
+            ("completed", at_goal.all(axis=-1)),
+        ):
+            first = getattr(self, name)
+            first[(first < 0) & condition] = t[(first < 0) & condition]
+        self.arrival = np.where((self.arrival < 0) & at_goal, t[:, None], self.arrival)
         if filter_stats is not None:
-            self.n_infeasible += int(np.sum(~filter_stats["feasible"]))
-            self.n_unrecoverable_pairs += int(filter_stats["n_unrecoverable_pairs"])
-            self.n_capped_shares += int(filter_stats["n_capped_shares"])
-            self.min_barrier = min(self.min_barrier, float(filter_stats["min_h"]))
+            self.infeasible += (~filter_stats["feasible"]).sum(axis=-1)
+            self.unrecoverable_pairs += filter_stats["n_unrecoverable_pairs"]
+            self.capped_shares += filter_stats["n_capped_shares"]
+            np.minimum(self.min_barrier, filter_stats["min_h"], out=self.min_barrier)
 
-    def summary(self) -> dict[str, Any]:
-        """The episode's metrics as plain Python values and arrays."""
-        return {
+    def flat(self) -> dict[str, NDArray]:
+        """(E,) arrays ``episode_<field>`` of the running episodes (final on their last step)."""
+        values = {
             "steps": self.steps,
-            "success": self.completed is not None,
-            "deadlock_onset": self.deadlock_onset,
-            "deadlock_resolved": self.deadlock_resolved,
+            "success": self.completed >= 0,
             "completed": self.completed,
             "min_distance": self.min_distance,
-            "n_collision_steps": self.n_collision_steps,
-            "n_infeasible": self.n_infeasible,
-            "n_unrecoverable_pairs": self.n_unrecoverable_pairs,
-            "n_capped_shares": self.n_capped_shares,
-            "min_barrier": self.min_barrier,
-            "path_length": self.path_length.copy(),
-            "deviation": self.deviation.copy(),
-            "arrival": self.arrival.copy(),
-            "min_distance_series": np.array(self.min_distance_series),
-            "avg_min_distance_series": np.array(self.avg_min_distance_series),
+            "collision_steps": self.collision_steps,
+            "infeasible": self.infeasible,
         }
+        return {f"episode_{k}": values[k].astype(dtype) for k, dtype in FLAT_FIELDS}
+
+    def summary(self, e: int = 0) -> dict[str, Any]:
+        """Env e's episode as plain Python values and arrays."""
+
+        def step(x: NDArray) -> int | None:
+            return None if x[e] < 0 else int(x[e])
+
+        out = {
+            "steps": int(self.steps[e]),
+            "success": bool(self.completed[e] >= 0),
+            "deadlock_onset": step(self.deadlock_onset),
+            "deadlock_resolved": step(self.deadlock_resolved),
+            "completed": step(self.completed),
+            "min_distance": float(self.min_distance[e]),
+            "n_collision_steps": int(self.collision_steps[e]),
+            "n_infeasible": int(self.infeasible[e]),
+            "n_unrecoverable_pairs": int(self.unrecoverable_pairs[e]),
+            "n_capped_shares": int(self.capped_shares[e]),
+            "min_barrier": float(self.min_barrier[e]),
+            "path_length": self.path_length[e].copy(),
+            "deviation": self.deviation[e].copy(),
+            "arrival": self.arrival[e].copy(),
+        }
+        if self.record_series:
+            out["min_distance_series"] = np.array(self.min_distance_series)
+            out["avg_min_distance_series"] = np.array(self.avg_min_distance_series)
+        return out

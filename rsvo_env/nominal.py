@@ -11,12 +11,18 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.neighbors import nearest_distance
-
 
 def clip_norm(u: NDArray[np.float64], limit: float) -> NDArray[np.float64]:
-    """Scale each row of u down to norm <= limit (directions kept)."""
+    """Scale each row of u down to norm <= limit (directions kept), without overflow: a huge
+    finite row such as (1e200, 0) keeps its direction."""
     norm = np.linalg.norm(u, axis=-1, keepdims=True)
+    if not np.isfinite(norm).all():
+        # |u|^2 overflowed: measure the norm of u scaled by its largest component
+        big = np.max(np.abs(u), axis=-1, keepdims=True)
+        scaled = np.linalg.norm(u / np.where(big > 0, big, 1.0), axis=-1, keepdims=True)
+        return np.where(np.isfinite(norm), u, u / big) * np.minimum(
+            1.0, limit / np.maximum(np.where(np.isfinite(norm), norm, scaled), 1e-300)
+        )
     return u * np.minimum(1.0, limit / np.maximum(norm, 1e-300))
 
 
@@ -28,15 +34,10 @@ def move_to_goal(
 
 
 def right_hand_active(
-    positions: NDArray[np.float64],
-    at_goal: NDArray[np.bool_],
-    trigger: float,
-    nearest: NDArray[np.float64] | None = None,
+    nearest: NDArray[np.float64], at_goal: NDArray[np.bool_], trigger: float
 ) -> NDArray[np.bool_]:
-    """Agents for which the right-hand rule fires: a neighbour closer than ``trigger``, and the
-    agent not at its goal. ``nearest`` may pass precomputed nearest-neighbour distances."""
-    if nearest is None:
-        nearest = nearest_distance(positions)
+    """Agents for which the right-hand rule fires: the nearest neighbour closer than
+    ``trigger``, and the agent not at its goal (arrays (..., N))."""
     return (nearest < trigger) & ~at_goal
 
 
@@ -50,7 +51,7 @@ def right_hand_rule(
     u: NDArray[np.float64], active: NDArray[np.bool_], angle_deg: float
 ) -> NDArray[np.float64]:
     """Rotate the nominal of the active agents clockwise by ``angle_deg``."""
-    return np.where(active[:, None], rotate(u, -np.deg2rad(angle_deg)), u)
+    return np.where(active[..., None], rotate(u, -np.deg2rad(angle_deg)), u)
 
 
 def lane_following(
@@ -68,19 +69,19 @@ def lane_following(
     Before the merge point (y below it) a vehicle follows the line from its lane start to the
     merge point; past it, the main lane x = merge_x heading +y. The command is a speed-tracking
     term along the lane plus a lateral spring-damper toward the lane line, scaled to
-    norm <= a_max.
+    norm <= a_max. Arrays are (..., N, 2); ``lane_start`` is (N, 2).
     """
-    on_ramp = positions[:, 1] < merge_point[1]
+    on_ramp = positions[..., 1] < merge_point[1]
     ramp_dir = merge_point - lane_start
-    ramp_dir = ramp_dir / np.linalg.norm(ramp_dir, axis=1, keepdims=True)
-    main_dir = np.broadcast_to(np.array([0.0, 1.0]), positions.shape)
-    direction = np.where(on_ramp[:, None], ramp_dir, main_dir)
-    normal = np.stack([-direction[:, 1], direction[:, 0]], axis=1)
+    ramp_dir = ramp_dir / np.linalg.norm(ramp_dir, axis=-1, keepdims=True)
+    main_dir = np.array([0.0, 1.0])
+    direction = np.where(on_ramp[..., None], ramp_dir, main_dir)
+    normal = np.stack([-direction[..., 1], direction[..., 0]], axis=-1)
     # both lane lines pass through the merge point
-    lateral = np.einsum("ij,ij->i", positions - merge_point, normal)
-    lateral_speed = np.einsum("ij,ij->i", velocities, normal)
-    speed_along = np.einsum("ij,ij->i", velocities, direction)
-    a = (k_v * (v_des - speed_along))[:, None] * direction - (
+    lateral = np.einsum("...j,...j->...", positions - merge_point, normal)
+    lateral_speed = np.einsum("...j,...j->...", velocities, normal)
+    speed_along = np.einsum("...j,...j->...", velocities, direction)
+    a = (k_v * (v_des - speed_along))[..., None] * direction - (
         k_lat * lateral + 2.0 * np.sqrt(k_lat) * lateral_speed
-    )[:, None] * normal
+    )[..., None] * normal
     return clip_norm(a, a_max)

@@ -69,24 +69,38 @@ def weight_matrix(theta: ArrayLike, mode: Weighting = "asymmetric") -> NDArray[n
     validated: entries in [0, 1] and ``W + W.T == 1`` off the diagonal (to 1e-9), since without
     that the pair rows no longer sum to the centralized condition. The diagonal is 0 (no row).
     The upper triangle is computed and the lower one set to ``1 - W.T``, so the pair sum is 1 to
-    one rounding.
+    one rounding. A batch of scores (E, N) gives (E, N, N).
     """
+    raw = np.asarray(theta)
+    if raw.ndim == 2:
+        return (
+            np.stack([weight_matrix(t, mode) for t in raw])
+            if callable(mode)
+            else (_string_weights(np.stack([check_theta(t) for t in raw]), mode))
+        )
     th = check_theta(theta, name="theta")
-    n = th.shape[0]
     if callable(mode):
         w = np.array(mode(th.copy()), dtype=np.float64)
-        return validate_weight_matrix(w, n)
+        return validate_weight_matrix(w, th.shape[0])
+    return _string_weights(th, mode)
+
+
+def _string_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
+    """Weights of a named mode for validated scores (..., N)."""
+    n = th.shape[-1]
     if mode == "symmetric":
-        w = np.full((n, n), 0.5)
+        w = np.full((*th.shape, n), 0.5)
     elif mode == "asymmetric":
-        w = pair_omega(th[:, None], th[None, :])
+        w = pair_omega(th[..., :, None], th[..., None, :])
         upper = np.triu(np.ones((n, n), dtype=bool), 1)
-        w.T[upper] = 1.0 - w[upper]
+        lower = np.swapaxes(w, -1, -2)
+        lower[..., upper] = 1.0 - w[..., upper]
     else:
         raise ValueError(
             f"weighting mode {mode!r} is unknown; use one of {WEIGHTING_MODES} or a callable"
         )
-    np.fill_diagonal(w, 0.0)
+    diag = np.arange(n)
+    w[..., diag, diag] = 0.0
     return w
 
 
@@ -129,7 +143,7 @@ def theta_for_weight(omega: float) -> tuple[float, float]:
 def min_pair_weight(theta: NDArray[np.float64], mode: Weighting) -> float:
     """Smallest omega over all pairs, in O(N): the most altruistic agent against the most egoistic.
 
-    Used to bound the sensing radius beyond which no row can bind (DESIGN.md section 3).
+    Used to bound the sensing radius beyond which no row can bind (``docs/math.md``).
     """
     if len(theta) < 2:
         return 0.5

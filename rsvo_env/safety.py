@@ -2,7 +2,10 @@
 
 ``SafetyFilter.filter`` builds every agent's rows (``barriers``) with the responsibility weights
 (``responsibility``) and solves every agent's QP (paper, eq. ``qp`` and Algorithm 1) in one batch
-(``solvers``). It works on arrays in physical units, so any simulator can call it.
+(``solvers``). It works on arrays in physical units, so any simulator can call it: one scene of
+N agents, (N, 2), or E independent scenes at once, (E, N, 2), pairs never crossing scenes. The
+simulation core calls :meth:`SafetyFilter.apply`, the same computation without the input checks,
+as the stage of its step right before integration.
 """
 
 from __future__ import annotations
@@ -10,13 +13,14 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import qpsolvers
 from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env import barriers, solvers
-from rsvo_env.neighbors import DENSE_MAX_AGENTS
+from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_distance
 from rsvo_env.responsibility import (
     WEIGHTING_MODES,
     Weighting,
@@ -25,7 +29,7 @@ from rsvo_env.responsibility import (
     validate_weight_matrix,
     weight_matrix,
 )
-from rsvo_env.validation import check_theta, check_vectors
+from rsvo_env.validation import check_theta, check_vectors, real_array
 
 DYNAMICS = ("single_integrator", "double_integrator")
 
@@ -37,7 +41,7 @@ class FilterConfig:
     ``u_max`` / ``u_min`` bound each input component (velocity for the single integrator,
     acceleration for the double integrator); ``u_min`` defaults to ``-u_max``. ``gamma`` is the
     class-K gain of eq. ``cbf``; with ``dt`` given, ``gamma * dt <= 1`` is required, the bound
-    under which the Euler step keeps ``h+ >= (1 - gamma dt) h >= 0`` (DESIGN.md section 3).
+    under which the Euler step keeps ``h+ >= (1 - gamma dt) h >= 0`` (``docs/math.md``).
     ``neighbor_radius`` limits the pairs examined; below the computed sensing radius the
     guarantee is lost and a warning says so.
     """
@@ -60,7 +64,11 @@ class FilterConfig:
     def __post_init__(self) -> None:
         def positive(name: str, value: object) -> None:
             try:
-                ok = math.isfinite(float(value)) and float(value) > 0  # type: ignore[arg-type]
+                ok = (
+                    not isinstance(value, (bool, np.bool_, str, bytes))
+                    and math.isfinite(float(value))  # type: ignore[arg-type]
+                    and float(value) > 0  # type: ignore[arg-type]
+                )
             except (TypeError, ValueError):
                 ok = False
             if not ok:
@@ -122,21 +130,38 @@ class FilterConfig:
 class FilterResult:
     """What the filter decided for each agent (the ``certify_action`` contract: action + flag).
 
-    ``feasible[i]`` is False when agent i's QP had no solution; its action is then the one that
-    minimises the largest normalised violation, never the nominal, and ``max_violation[i]`` says
-    by how much (metres of half-plane offset, 0 when feasible).
+    Per-agent arrays have the input's leading shape, (N, ...) or (E, N, ...); per-scene values
+    (``min_h``, ``n_unrecoverable_pairs``, ``n_capped_shares``) are scalars for one scene and (E,)
+    arrays for a batch. ``feasible[i]`` is False when agent i's QP had no solution; its action is
+    then the one that minimises the largest normalised violation, never the nominal, and
+    ``max_violation[i]`` says by how much (metres of half-plane offset, 0 when feasible).
     """
 
     actions: NDArray[np.float64]
     feasible: NDArray[np.bool_]
     intervention: NDArray[np.float64]
     active: NDArray[np.int64]
-    min_h: float
+    min_h: Any
     max_violation: NDArray[np.float64]
     n_rows: NDArray[np.int64]
-    n_unrecoverable_pairs: int
-    n_capped_shares: int
+    n_unrecoverable_pairs: Any
+    n_capped_shares: Any
     rows: barriers.Rows = field(repr=False)
+
+    def squeeze(self) -> FilterResult:
+        """The single-scene result of a batch of one."""
+        return FilterResult(
+            actions=self.actions[0],
+            feasible=self.feasible[0],
+            intervention=self.intervention[0],
+            active=self.active[0],
+            min_h=float(self.min_h[0]),
+            max_violation=self.max_violation[0],
+            n_rows=self.n_rows[0],
+            n_unrecoverable_pairs=int(self.n_unrecoverable_pairs[0]),
+            n_capped_shares=int(self.n_capped_shares[0]),
+            rows=self.rows,
+        )
 
 
 class SafetyFilter:
@@ -146,9 +171,6 @@ class SafetyFilter:
         if config is not None and kwargs:
             raise TypeError("pass either a FilterConfig or keyword arguments, not both")
         self.config = config if config is not None else FilterConfig(**kwargs)  # type: ignore[arg-type]
-        self._omega_in: object = None
-        self._omega_ok = np.zeros((0, 0))
-        self._omega_min = 0.5
 
     def pair_radius(self, theta: NDArray, omega: NDArray | None) -> float:
         """Radius of the pair search: the sensing radius (single integrator) or the user's."""
@@ -156,12 +178,12 @@ class SafetyFilter:
         if cfg.dynamics == "double_integrator":
             return cfg.neighbor_radius if cfg.neighbor_radius is not None else float("inf")
         if omega is not None:
-            if omega is not self._omega_ok:
-                n = omega.shape[0]
-                self._omega_min = float(omega[~np.eye(n, dtype=bool)].min()) if n > 1 else 0.5
-            w_min = self._omega_min
+            n = omega.shape[-1]
+            off = ~np.eye(n, dtype=bool)
+            w_min = float(omega[..., off].min()) if n > 1 else 0.5
         else:
-            w_min = min_pair_weight(theta, cfg.weighting)
+            th = theta.reshape(-1, theta.shape[-1])
+            w_min = min(min_pair_weight(t, cfg.weighting) for t in th)
         radius = barriers.sensing_radius(w_min, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
         if cfg.neighbor_radius is not None:
             if cfg.neighbor_radius < radius:
@@ -169,7 +191,7 @@ class SafetyFilter:
                     f"neighbor_radius = {cfg.neighbor_radius} is below the sensing radius "
                     f"{radius:.6g} beyond which no row can bind: the safety guarantee no longer "
                     "holds",
-                    stacklevel=3,
+                    stacklevel=4,
                 )
             return cfg.neighbor_radius
         return radius
@@ -177,15 +199,19 @@ class SafetyFilter:
     def pair_weights(
         self, theta: NDArray, omega: NDArray | None, I: NDArray, J: NDArray
     ) -> NDArray[np.float64]:
-        """(P, 2) weights of each pair: omega_IJ and omega_JI (Thm. 1), summing to 1."""
+        """(P, 2) weights of each pair (flat agent indices): omega_IJ and omega_JI (Thm. 1),
+        summing to 1. ``theta`` is (N,) or (E, N), ``omega`` (N, N) or (E, N, N)."""
         mode = self.config.weighting
+        n = theta.shape[-1]
         if omega is None and callable(mode):
             omega = weight_matrix(theta, mode)
         if omega is not None:
-            return np.stack([omega[I, J], omega[J, I]], axis=1)
+            flat = omega.reshape(-1, n)
+            return np.stack([flat[I, J % n], flat[J, I % n]], axis=1)
         if mode == "symmetric":
             return np.full((len(I), 2), 0.5)
-        w = pair_omega(theta[I], theta[J])
+        th = theta.reshape(-1)
+        w = pair_omega(th[I], th[J])
         return np.stack([w, 1.0 - w], axis=1)
 
     def filter(
@@ -196,49 +222,76 @@ class SafetyFilter:
         velocities: ArrayLike | None = None,
         omega: ArrayLike | None = None,
     ) -> FilterResult:
-        """Safe actions for N agents (paper, eq. ``qp`` per agent).
+        """Safe actions (paper, eq. ``qp`` per agent) for one scene or a batch of scenes.
 
-        positions, nominal, velocities: (N, 2) in physical units; theta: (N,) personality
-        scores; omega: optional (N, N) weight matrix that replaces the configured weighting
-        (the world's ``omega``). Bad input raises ``ValueError`` naming field, agent and value.
+        positions, nominal, velocities: (N, 2) or (E, N, 2) in physical units; theta: (N,) or
+        (E, N) personality scores; omega: optional weight matrix, (N, N) or (E, N, N), that
+        replaces the configured weighting (validated on every call). Bad input raises
+        ``ValueError`` naming field, agent and value.
         """
         cfg = self.config
-        pos = check_vectors(positions, "positions")
-        n = pos.shape[0]
-        nom = check_vectors(nominal, "nominal", n)
-        th = check_theta(theta)
-        if th.shape[0] != n:
-            raise ValueError(f"theta has {th.shape[0]} entries, expected {n} (one per agent)")
+        pos = check_vectors(positions, "positions", lead=None)
+        single = pos.ndim == 2
+        lead, n = pos.shape[:-2], pos.shape[-2]
+        if n < 1:
+            raise ValueError("positions has no agents: the filter needs at least one")
+        nom = check_vectors(nominal, "nominal", n, lead=lead)
+        th = check_theta(theta) if single else real_array(theta, "theta")
+        if th.shape != (*lead, n):
+            raise ValueError(
+                f"theta has shape {th.shape}, expected {(*lead, n)} (one score per agent)"
+                if not single
+                else f"theta has {th.shape[0]} entries, expected {n} (one per agent)"
+            )
+        if not single:
+            for e in range(lead[0]):
+                check_theta(th[e], name=f"theta[{e}]")
         W = None
         if omega is not None:
-            # The world hands the same matrix object every step until theta or the mode changes;
-            # validating it once is enough.
-            if omega is self._omega_in and self._omega_ok.shape == (n, n):
-                W = self._omega_ok
-            else:
-                W = validate_weight_matrix(np.asarray(omega, dtype=np.float64), n)
-                off = ~np.eye(n, dtype=bool)
-                self._omega_min = float(W[off].min()) if n > 1 else 0.5
-                self._omega_in, self._omega_ok = omega, W
+            W_in = real_array(omega, "omega")
+            if W_in.shape != (*lead, n, n):
+                raise ValueError(f"omega has shape {W_in.shape}, expected {(*lead, n, n)}")
+            W = np.stack([validate_weight_matrix(w, n) for w in W_in.reshape(-1, n, n)])
+        vel = None
+        if cfg.dynamics == "double_integrator":
+            if velocities is None:
+                raise ValueError("velocities are required for the double integrator")
+            vel = check_vectors(velocities, "velocities", n, lead=lead)
+        if single:
+            vel = None if vel is None else vel[None]
+            return self.apply(pos[None], nom[None], th[None], vel, W).squeeze()
+        return self.apply(pos, nom, th, vel, W)
+
+    def apply(
+        self,
+        positions: NDArray[np.float64],
+        nominal: NDArray[np.float64],
+        theta: NDArray[np.float64],
+        velocities: NDArray[np.float64] | None = None,
+        omega: NDArray[np.float64] | None = None,
+    ) -> FilterResult:
+        """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
+
+        One call of the row builder and one of the solver serve all E x N agents.
+        """
+        cfg = self.config
+        E, n = theta.shape
+        pos = positions.reshape(E * n, 2)
         dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
         if dense:
             # Few agents: every pair, and exact culling drops the rows that cannot bind.
-            I, J = barriers.all_pairs(n)
+            I, J = barriers.all_pairs(n, E)
         else:
-            I, J = barriers.candidate_pairs(pos, self.pair_radius(th, W))
-        weights = self.pair_weights(th, W, I, J)
+            I, J = barriers.candidate_pairs(positions, self.pair_radius(theta, omega))
+        weights = self.pair_weights(theta, omega, I, J)
         if cfg.dynamics == "single_integrator":
-            min_h = None if dense else barriers.nearest_h(pos, cfg.safety_radius)
             rows = barriers.single_integrator_rows(
-                pos, weights, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, min_h
+                pos, weights, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi
             )
         else:
-            if velocities is None:
-                raise ValueError("velocities are required for the double integrator")
-            vel = check_vectors(velocities, "velocities", n)
             rows = barriers.double_integrator_rows(
                 pos,
-                vel,
+                velocities.reshape(E * n, 2),
                 weights,
                 I,
                 J,
@@ -251,18 +304,37 @@ class SafetyFilter:
                 gamma2=cfg.gamma2,
                 dt=cfg.dt,
             )
+        nom = nominal.reshape(E * n, 2)
         actions, feasible, active, violation = solvers.solve(
             cfg.solver, nom, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi
         )
         return FilterResult(
-            actions=actions,
-            feasible=feasible,
-            intervention=np.linalg.norm(actions - nom, axis=1),
-            active=active,
-            min_h=rows.min_h,
-            max_violation=violation,
-            n_rows=rows.mask.sum(axis=1),
-            n_unrecoverable_pairs=rows.n_unrecoverable_pairs,
-            n_capped_shares=rows.n_capped_shares,
+            actions=actions.reshape(E, n, 2),
+            feasible=feasible.reshape(E, n),
+            intervention=np.linalg.norm(actions - nom, axis=-1).reshape(E, n),
+            active=active.reshape(E, n),
+            min_h=self._min_h(rows, positions, I, dense),
+            max_violation=violation.reshape(E, n),
+            n_rows=rows.mask.sum(axis=-1).reshape(E, n),
+            n_unrecoverable_pairs=rows.unrecoverable.reshape(E, -1).sum(axis=-1) // 2,
+            n_capped_shares=rows.capped.reshape(E, -1).sum(axis=-1),
             rows=rows,
         )
+
+    def _min_h(
+        self, rows: barriers.Rows, positions: NDArray, I: NDArray, dense: bool
+    ) -> NDArray[np.float64]:
+        """(E,) smallest barrier value of each scene over the pairs examined; for the single
+        integrator beyond the dense size, over all pairs (the nearest pair may lie outside the
+        pair search)."""
+        E, n = positions.shape[:2]
+        if dense:
+            if n < 2:
+                return np.full(E, np.inf)
+            return rows.pair_h.reshape(E, -1).min(axis=-1)
+        out = np.full(E, np.inf)
+        np.minimum.at(out, I // n, rows.pair_h)
+        if self.config.dynamics == "single_integrator":
+            nearest = nearest_distance(positions).min(axis=-1)
+            out = np.minimum(out, nearest**2 - self.config.safety_radius**2)
+        return out

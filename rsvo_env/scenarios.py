@@ -1,8 +1,11 @@
 """The paper's experiments (Sec. V) and a random crowd, one small class each.
 
-A scenario owns its parameters (DESIGN.md section 5 defaults, every one overridable by keyword;
-an unknown keyword raises ``TypeError`` naming it), draws initial states from the env's seeded
-generator, and computes the scripted nominal controller.
+A scenario owns its parameters (the defaults of ``docs/scenarios.md``, every one overridable by
+keyword; an unknown keyword raises ``TypeError`` naming it) and the hooks the simulation core calls
+for what differs between scenarios: initial states (drawn from one env's seeded generator), the
+scripted nominal controller, the goal test (success is every agent at its goal), the reward terms
+and the arena. Every hook but ``initial_state`` is batch-first: it takes the core's state, whose
+arrays are (E, N, ...), and answers for all envs at once.
 """
 
 from __future__ import annotations
@@ -41,6 +44,11 @@ class Scenario:
             )
         params.update(kwargs)
         self.params = params
+        count = params["num_agents"]
+        if isinstance(count, (bool, np.bool_)) or not isinstance(count, (int, np.integer)):
+            raise ValueError(f"{self.name}.num_agents = {count!r} must be an integer >= 2")
+        if count < 2:
+            raise ValueError(f"{self.name}.num_agents = {count!r} must be an integer >= 2")
         for key in ("dt", "goal_tolerance", "safety_radius", "gamma", "k", "theta_max"):
             if key in params:
                 params[key] = check_positive(params[key], f"{self.name}.{key}")
@@ -101,19 +109,35 @@ class Scenario:
         """A box (lo, hi) that holds every start and goal, for drawing and observation bounds."""
         raise NotImplementedError
 
-    def nominal(self, world: Any) -> NDArray[np.float64]:
-        """Scripted nominal actions (N, 2) in physical units: move-to-goal + right-hand rule."""
-        u = nominal.move_to_goal(world.positions, world.goals, self.params["k"], self.u_max)
+    def nominal(self, state: Any) -> NDArray[np.float64]:
+        """Scripted nominal controls (E, N, 2) in physical units: move-to-goal (paper, Sec. V-A)
+        plus the right-hand rule."""
+        u = nominal.move_to_goal(state.positions, state.goals, self.params["k"], self.u_max)
         if self.params["deadlock_resolution"] == "right_hand":
-            active = self.right_hand_active(world)
-            u = nominal.right_hand_rule(u, active, self.params["rh_angle_deg"])
+            u = nominal.right_hand_rule(
+                u, self.right_hand_active(state), self.params["rh_angle_deg"]
+            )
         return u
 
-    def right_hand_active(self, world: Any) -> NDArray[np.bool_]:
-        at_goal = self.at_goal(world.positions, world.goals)
-        return nominal.right_hand_active(
-            world.positions, at_goal, self.rh_trigger, world.nearest_distance()
-        )
+    def right_hand_active(self, state: Any) -> NDArray[np.bool_]:
+        """(E, N): agents whose nominal the right-hand rule turns (always False without it)."""
+        if self.params["deadlock_resolution"] != "right_hand":
+            return np.zeros(state.nearest.shape, dtype=bool)
+        at_goal = self.at_goal(state.positions, state.goals)
+        return nominal.right_hand_active(state.nearest, at_goal, self.rh_trigger)
+
+    def reward(
+        self,
+        before: NDArray[np.float64],
+        after: NDArray[np.float64],
+        goals: NDArray[np.float64],
+        first_arrival: NDArray[np.bool_],
+        weights: tuple[float, float, float],
+    ) -> NDArray[np.float64]:
+        """Per-agent reward (E, N): progress toward the goal, a time cost, a goal bonus once."""
+        progress_w, time_w, goal_w = weights
+        progress = np.linalg.norm(before - goals, axis=-1) - np.linalg.norm(after - goals, axis=-1)
+        return progress_w * progress - time_w + goal_w * first_arrival
 
     @property
     def rh_trigger(self) -> float:
@@ -123,7 +147,8 @@ class Scenario:
         return float(self.params["rh_trigger"])
 
     def at_goal(self, positions: NDArray, goals: NDArray) -> NDArray[np.bool_]:
-        return np.linalg.norm(positions - goals, axis=1) <= self.params["goal_tolerance"]
+        """(..., N): agents within ``goal_tolerance`` of their goals."""
+        return np.linalg.norm(positions - goals, axis=-1) <= self.params["goal_tolerance"]
 
 
 class PositionSwap(Scenario):
@@ -226,11 +251,11 @@ class RampMerge(Scenario):
         hi = np.array([start[:, 0].max(), self.params["finish_y"]]) + 10.0
         return lo, hi
 
-    def nominal(self, world):
+    def nominal(self, state):
         p = self.params
         return nominal.lane_following(
-            world.positions,
-            world.velocities,
+            state.positions,
+            state.velocities,
             self.lane_starts(),
             np.array(p["merge_point"], dtype=np.float64),
             p["v_des"],
@@ -239,11 +264,11 @@ class RampMerge(Scenario):
             p["a_max"],
         )
 
-    def right_hand_active(self, world):
-        return np.zeros(world.n, dtype=bool)
+    def right_hand_active(self, state):
+        return np.zeros(state.nearest.shape, dtype=bool)
 
     def at_goal(self, positions, goals):
-        return positions[:, 1] >= self.params["finish_y"]
+        return positions[..., 1] >= self.params["finish_y"]
 
 
 class Crowd(Scenario):

@@ -18,14 +18,24 @@ def _label(index: int, names: Sequence[str] | None) -> str:
     return f"agent {names[index]!r} (index {index})"
 
 
+def real_array(values: ArrayLike, name: str) -> NDArray[np.float64]:
+    """``values`` as float64, refusing what is not a real number: strings, bools, complex
+    numbers and objects raise ``ValueError`` naming ``name`` (numpy would convert some of them
+    silently: ``"1.5"`` to 1.5, ``True`` to 1.0, ``1+2j`` to 1.0)."""
+    try:
+        arr = np.asarray(values)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be real numbers, got {values!r}") from exc
+    if arr.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be real numbers, got {arr.dtype} values: {values!r}")
+    return arr.astype(np.float64, copy=False)
+
+
 def check_theta(
     theta: ArrayLike, name: str = "theta", allow_scalar: bool = False
 ) -> NDArray[np.float64]:
     """Personality scores: finite and >= 0 (paper, Sec. III-A: theta_i in R>=0)."""
-    try:
-        arr = np.asarray(theta, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be numeric, got {theta!r}") from exc
+    arr = real_array(theta, name)
     if arr.ndim == 0 and not allow_scalar:
         arr = arr.reshape(1)
     if not allow_scalar and arr.ndim != 1:
@@ -47,28 +57,32 @@ def check_vectors(
     name: str,
     n: int | None = None,
     names: Sequence[str] | None = None,
+    lead: tuple[int, ...] | None = (),
 ) -> NDArray[np.float64]:
-    """An (N, 2) array of finite planar vectors (positions, velocities, actions)."""
-    try:
-        arr = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a numeric (N, 2) array, got {values!r}") from exc
-    if arr.ndim != 2 or arr.shape[1] != 2 or (n is not None and arr.shape[0] != n):
-        want = f"({n}, 2)" if n is not None else "(N, 2)"
+    """An array of finite planar vectors (positions, velocities, actions), shape
+    ``lead + (N, 2)``: (N, 2) by default, (E, N, 2) with ``lead=(E,)``, either with
+    ``lead=None``. The error names the env (when batched), the agent and the value."""
+    arr = real_array(values, name)
+    ok_lead = arr.ndim in (2, 3) if lead is None else arr.shape[:-2] == lead
+    if arr.ndim < 2 or not ok_lead or arr.shape[-1] != 2 or (n is not None and arr.shape[-2] != n):
+        rows = "N" if n is None else str(n)
+        want = f"({', '.join([*map(str, lead or ()), rows])}, 2)"
         raise ValueError(f"{name} has shape {arr.shape}, expected {want}")
-    bad = ~np.isfinite(arr).all(axis=1)
+    bad = ~np.isfinite(arr).all(axis=-1)
     if bad.any():
-        i = int(np.argmax(bad))
-        raise ValueError(f"{name}[{i}] = {arr[i].tolist()} is not finite ({_label(i, names)})")
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        i = idx[-1]
+        env = f"env {idx[0]}, " if len(idx) == 2 else ""
+        where = "".join(f"[{k}]" for k in idx)
+        raise ValueError(
+            f"{name}{where} = {arr[idx].tolist()} is not finite ({env}{_label(i, names)})"
+        )
     return arr
 
 
 def check_action(value: ArrayLike, agent: str, shape: tuple[int, ...] = (2,)) -> NDArray:
-    """One agent's action: numeric, the right shape, finite."""
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"action of agent {agent!r} is not numeric: {value!r}") from exc
+    """One agent's action: real numbers, the right shape, finite."""
+    arr = real_array(value, f"action of agent {agent!r}")
     if arr.shape != shape:
         raise ValueError(f"action of agent {agent!r} has shape {arr.shape}, expected {shape}")
     if not np.isfinite(arr).all():
@@ -97,17 +111,41 @@ def check_action_dict(
         missing = [a for a in agents if a not in actions]
         raise ValueError(f"no action given for agent {missing[0]!r}")
     try:
-        out = np.array([actions[a] for a in agents], dtype=np.float64)
+        out = np.array([actions[a] for a in agents])
     except (TypeError, ValueError):
         out = None
-    if out is None or out.shape != (len(agents),) + shape or not np.isfinite(out).all():
+    if (
+        out is None
+        or out.dtype.kind not in "uif"
+        or out.shape != (len(agents),) + shape
+        or not np.isfinite(out).all()
+    ):
         for agent in agents:
             check_action(actions[agent], agent, shape)
-    return out
+    return out.astype(np.float64, copy=False)
 
 
 def check_positive(value: float, name: str) -> float:
-    v = float(value)
+    """A finite real number > 0 (not a bool or a string)."""
+    if isinstance(value, (bool, np.bool_, str, bytes)):
+        raise ValueError(f"{name} = {value!r} must be a finite number > 0")
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} = {value!r} must be a finite number > 0") from exc
     if not np.isfinite(v) or v <= 0:
         raise ValueError(f"{name} = {value!r} must be a finite number > 0")
+    return v
+
+
+def check_real(value: float, name: str) -> float:
+    """A finite real number (not a bool, a string or a complex number)."""
+    if isinstance(value, (bool, np.bool_, str, bytes, complex, np.complexfloating)):
+        raise ValueError(f"{name} = {value!r} must be a finite real number")
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} = {value!r} must be a finite real number") from exc
+    if not np.isfinite(v):
+        raise ValueError(f"{name} = {value!r} must be a finite real number")
     return v

@@ -70,7 +70,7 @@ def test_culling_changes_no_solution(n, seed):
     nominal = rng.uniform(-2, 2, (n, 2))
     cfg = FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0)
     res = SafetyFilter(cfg).filter(x, nominal, theta)
-    I, J = barriers.candidate_pairs(x)
+    I, J = barriers.candidate_pairs(x[None])
     w = SafetyFilter(cfg).pair_weights(theta, None, I, J)
     full = barriers.single_integrator_rows(x, w, I, J, 10.0, 1.0, cfg.lo, cfg.hi, cull=False)
     from rsvo_env.solvers import exact
@@ -96,7 +96,7 @@ def test_kdtree_pairs_match_dense_pairs():
 
     u_dense = exact.solve_batch(nominal, dense.A, dense.b, dense.mask, cfg.lo, cfg.hi)[0]
     np.testing.assert_allclose(res.actions, u_dense, atol=1e-12)
-    assert res.min_h == pytest.approx(dense.min_h)
+    assert res.min_h == pytest.approx(dense.pair_h.min())
     radius = flt.pair_radius(theta, None)
     assert np.isfinite(radius)
 

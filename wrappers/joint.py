@@ -2,7 +2,10 @@
 
 This is what ``gymnasium.make("rsvo/CircularSwap-v0")`` returns: the filtered ParallelEnv seen
 by a single controller. Reward: the sum over agents; terminated when all agents are at their
-goals; truncated at ``max_steps``.
+goals; truncated at ``max_steps``. The info is flat (no nested dicts, no ``episode`` key, which
+Gymnasium's ``RecordEpisodeStatistics`` and SB3's ``Monitor`` reserve): ``cost`` (summed),
+``min_distance`` (smallest), every per-agent signal stacked in agent order (``u_safe`` (N, 2),
+``feasible`` (N,), ...), and the running episode's ``episode_*`` values.
 """
 
 from __future__ import annotations
@@ -17,7 +20,8 @@ from wrappers.safety_filter import filtered_parallel_env
 
 class JointControlEnv(gymnasium.Env):
     """Action: ``Box(-1, 1, (2 N,))``, agent i's action at ``[2 i, 2 i + 2)``. Observation: the
-    agents' observations concatenated in ``possible_agents`` order."""
+    agents' observations concatenated in ``possible_agents`` order. ``parallel`` is the
+    (filtered) PettingZoo ParallelEnv it drives."""
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 50}
 
@@ -54,7 +58,20 @@ class JointControlEnv(gymnasium.Env):
             seed = int(self.np_random.integers(2**31))
         self._seeded = True
         obs, infos = self.parallel.reset(seed=seed, options=options)
-        return self._flat(obs), {"agents": infos}
+        return self._flat(obs), self._info(infos)
+
+    def _info(self, infos: dict[str, dict[str, Any]]) -> dict[str, Any]:
+        per_agent = [infos[a] for a in self.agent_names]
+        first = per_agent[0]
+        info: dict[str, Any] = {
+            key: (
+                first[key] if key.startswith("episode_") else np.array([i[key] for i in per_agent])
+            )
+            for key in first
+        }
+        info["cost"] = float(info["cost"].sum())
+        info["min_distance"] = float(info["min_distance"].min())
+        return info
 
     def step(self, action: Any):
         a = np.asarray(action, dtype=np.float64)
@@ -76,15 +93,7 @@ class JointControlEnv(gymnasium.Env):
         reward = float(sum(rewards.values()))
         terminated = all(terms.values())
         truncated = (not terminated) and any(truncs.values())
-        first = infos[self.agent_names[0]]
-        info: dict[str, Any] = {
-            "agents": infos,
-            "cost": float(sum(i["cost"] for i in infos.values())),
-            "min_distance": float(min(i["min_distance"] for i in infos.values())),
-        }
-        if "episode" in first:
-            info["episode_metrics"] = first["episode"]
-        return self._flat(obs), reward, terminated, truncated, info
+        return self._flat(obs), reward, terminated, truncated, self._info(infos)
 
     def nominal_action(self) -> np.ndarray:
         """The scripted controller's joint action for the current state."""

@@ -1,4 +1,4 @@
-"""ResponsibilityWeighting: choose how pairs share responsibility (DESIGN.md section 2).
+"""ResponsibilityWeighting: choose how pairs share responsibility.
 
 The weighting lives in the world: this wrapper sets the base env's mode (and the current
 world's, if an episode is running), and the filter reads ``world.omega``, so the two wrappers
@@ -10,10 +10,9 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 from pettingzoo.utils import BaseParallelWrapper
 
-from rsvo_env.responsibility import Weighting, weight_matrix
+from rsvo_env.responsibility import Weighting
 
 
 class ResponsibilityWeighting(BaseParallelWrapper):
@@ -22,12 +21,8 @@ class ResponsibilityWeighting(BaseParallelWrapper):
 
     def __init__(self, env: Any, mode: Weighting = "asymmetric") -> None:
         super().__init__(env)
-        base = env.unwrapped
-        weight_matrix(np.ones(len(base.possible_agents)), mode)  # fail now on a bad mode
+        env.unwrapped.set_weighting(mode)  # validated: fails now on a bad mode
         self.mode = mode
-        base.weighting = mode
-        if base.world is not None:
-            base.world.set_weighting(mode)
 
     def reset(self, seed: int | None = None, options: dict | None = None):
         # Passed down as an option: the outermost weighting wrapper wins over inner ones, and an

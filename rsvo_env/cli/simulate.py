@@ -44,12 +44,11 @@ def run(
     env.reset(seed=seed, options=options)
     base = env.unwrapped
     frames = [env.render()] if gif else []
-    infos: dict = {}
     while env.agents:
-        _, _, _, _, infos = env.step(base.nominal_actions())
+        env.step(base.nominal_actions())
         if gif and (base.metrics.steps % gif_every == 0 or not env.agents):
             frames.append(env.render())
-    out = dict(next(iter(infos.values()))["episode"])
+    out = dict(base.episode_metrics)
     out["trajectory"] = np.stack(base.history)
     out["theta"] = base.world.theta.copy()
     out["goals"] = base.world.goals.copy()

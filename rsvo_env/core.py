@@ -1,0 +1,369 @@
+"""The simulation core: E envs x N agents of one scenario stepped by one array program.
+
+``step`` takes normalised actions (E, N, 2) and runs, for all envs at once::
+
+    actions -> controls (clip norm, scale, frame) -> [filter stage] -> integrate -> signals
+
+The filter stage is a list of :class:`rsvo_env.safety.SafetyFilter` applied right before
+integration to the state being integrated, so the control the filter certifies is the control
+integrated, whatever wrappers are stacked around the adapters. Adapters (``RSVOParallelEnv`` for
+E = 1 with PettingZoo dicts, ``BatchedEnv`` for E envs) only change the shape of the API.
+Each env has its own seeded generator; this class is the one writer of the state.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium.utils import seeding
+from numpy.typing import NDArray
+
+from rsvo_env import dynamics, nominal, observation
+from rsvo_env.metrics import EpisodeMetrics, collided, passed_midpoint
+from rsvo_env.neighbors import nearest_neighbors
+from rsvo_env.responsibility import Weighting, weight_matrix
+from rsvo_env.safety import FilterConfig, FilterResult, SafetyFilter
+from rsvo_env.scenarios import Scenario
+from rsvo_env.state import State
+from rsvo_env.validation import check_real
+
+RESET_OPTIONS = ("theta", "weighting")
+
+
+def filter_config(
+    scenario: Scenario,
+    gamma: float | None = None,
+    solver: str = "exact",
+    barrier: str | None = None,
+    split: str | None = None,
+    neighbor_radius: float | None = None,
+) -> FilterConfig:
+    """The filter's parameters for a scenario: its gamma, radius, limits, dt and dynamics,
+    each overridable (validated now, so a bad value fails before the first step)."""
+    p = scenario.params
+    return FilterConfig(
+        gamma=p["gamma"] if gamma is None else gamma,
+        safety_radius=p["safety_radius"],
+        u_max=scenario.u_max,
+        dt=p["dt"],
+        dynamics=scenario.dynamics,
+        solver=solver,
+        barrier=barrier or p.get("barrier", "braking"),
+        split=split or p.get("split", "capability"),
+        neighbor_radius=neighbor_radius,
+    )
+
+
+class Simulator:
+    """State arrays (E, N, ...), per-env generators and per-env reset, and the step above.
+
+    ``weighting`` is the default mode of every episode (a reset option overrides it for one
+    reset); ``reward_*`` weigh the scenario's reward terms; ``record_series`` (E = 1 only) keeps
+    the per-step series the paper plots.
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        num_envs: int = 1,
+        num_obs_neighbors: int | None = None,
+        frame: str = "world",
+        weighting: Weighting = "asymmetric",
+        reward_progress: float = 1.0,
+        reward_time: float = 0.01,
+        reward_goal: float = 10.0,
+        record_series: bool = False,
+    ) -> None:
+        n = scenario.num_agents
+        if isinstance(num_envs, (bool, np.bool_)) or not isinstance(num_envs, (int, np.integer)):
+            raise ValueError(f"num_envs = {num_envs!r} must be an integer >= 1")
+        if num_envs < 1:
+            raise ValueError(f"num_envs = {num_envs!r} must be an integer >= 1")
+        if frame not in observation.FRAMES:
+            raise ValueError(f"frame = {frame!r}; use one of {observation.FRAMES}")
+        if num_obs_neighbors is None:
+            num_obs_neighbors = min(n - 1, 6)
+        if (
+            isinstance(num_obs_neighbors, (bool, np.bool_))
+            or not isinstance(num_obs_neighbors, (int, np.integer))
+            or not 0 <= num_obs_neighbors < n
+        ):
+            raise ValueError(f"num_obs_neighbors = {num_obs_neighbors!r} must be in [0, {n - 1}]")
+        weight_matrix(np.ones(n), weighting)  # validates the mode now, not at the first reset
+        self.scenario, self.num_envs, self.n = scenario, int(num_envs), n
+        self.k = int(num_obs_neighbors)
+        self.frame, self.weighting = frame, weighting
+        self.reward_weights = tuple(
+            check_real(v, name)
+            for v, name in (
+                (reward_progress, "reward_progress"),
+                (reward_time, "reward_time"),
+                (reward_goal, "reward_goal"),
+            )
+        )
+        p = scenario.params
+        self.dt, self.max_steps, self.u_max = float(p["dt"]), int(p["max_steps"]), scenario.u_max
+        self.safety_radius = float(p["safety_radius"])
+        self.world_params = {
+            "safety_radius": self.safety_radius,
+            "u_max": self.u_max,
+            "dt": self.dt,
+            "dynamics": scenario.dynamics,
+            "gamma": float(p["gamma"]),
+            "goal_tolerance": float(p["goal_tolerance"]),
+            "barrier": p.get("barrier", "braking"),
+            "split": p.get("split", "capability"),
+        }
+        self.filters: list[SafetyFilter] = []
+        self.penalties: list[float] = []
+        self.rngs: list[np.random.Generator | None] = [None] * self.num_envs
+        self.state = State.empty(self.num_envs, n, self.k)
+        self.metrics = EpisodeMetrics(
+            self.num_envs, n, self.dt, self.safety_radius, record_series=record_series
+        )
+        self.limits = observation.Limits(*self._extent(), p["theta_max"], self.safety_radius)
+
+    # ---- configuration ----------------------------------------------------------------------
+    def _extent(self) -> tuple[float, float]:
+        """Finite bounds on every position and velocity component reachable in an episode."""
+        sc = self.scenario
+        lo, hi = sc.arena()  # holds every start and goal
+        horizon = self.max_steps * self.dt
+        extent = float(max(np.abs(lo).max(), np.abs(hi).max()))
+        if sc.dynamics == "double_integrator":
+            v0 = float(sc.params.get("v0", 0.0))
+            v = v0 + sc.u_max * horizon
+            return extent + v0 * horizon + 0.5 * sc.u_max * horizon**2, v
+        return extent + sc.u_max * horizon, sc.u_max
+
+    def add_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
+        """Add a safety-filter stage before the stages already there (an outer wrapper's filter
+        acts first, as wrappers would), and its reward penalty ``c |u_safe - u_nominal|^2``."""
+        if flt.config.dynamics != self.scenario.dynamics:
+            raise ValueError(
+                f"filter dynamics {flt.config.dynamics!r} != scenario {self.scenario.dynamics!r}"
+            )
+        c = check_real(intervention_penalty, "intervention_penalty")
+        if c < 0:
+            raise ValueError(f"intervention_penalty = {intervention_penalty!r} must be >= 0")
+        self.filters.insert(0, flt)
+        self.penalties.append(c)
+
+    def set_theta(self, e: int, theta: Any) -> None:
+        th = self.scenario.check_theta(theta)
+        omega = weight_matrix(th, self.state.weighting[e])
+        self.state.theta[e], self.state.omega[e] = th, omega
+
+    def set_weighting(self, e: int | None, weighting: Weighting) -> None:
+        """Weighting of env e's running episode (all envs: None)."""
+        envs = range(self.num_envs) if e is None else [e]
+        omegas = [weight_matrix(self.state.theta[i], weighting) for i in envs]
+        for i, omega in zip(envs, omegas, strict=True):
+            self.state.omega[i], self.state.weighting[i] = omega, weighting
+
+    # ---- episodes ---------------------------------------------------------------------------
+    def check_options(self, options: dict | None) -> tuple[NDArray | None, Weighting]:
+        """Theta (E, N) or None, and the weighting, from reset options; other keys are left for
+        wrappers (PettingZoo's own API test passes one of its own)."""
+        options = options or {}
+        theta = None
+        if "theta" in options:
+            raw = np.asarray(options["theta"])
+            rows = raw.reshape(-1, self.n) if raw.ndim == 2 else [options["theta"]]
+            if raw.ndim == 2 and raw.shape[0] != self.num_envs:
+                raise ValueError(
+                    f"theta has shape {raw.shape}, expected ({self.n},) or "
+                    f"({self.num_envs}, {self.n})"
+                )
+            checked = [self.scenario.check_theta(r) for r in rows]
+            theta = np.broadcast_to(np.stack(checked), (self.num_envs, self.n))
+        weighting = options.get("weighting", self.weighting)
+        weight_matrix(np.ones(self.n) if theta is None else theta[0], weighting)
+        return theta, weighting
+
+    def reset(
+        self,
+        envs: Sequence[int],
+        seeds: Sequence[int | None],
+        theta: NDArray | None = None,
+        weighting: Weighting | None = None,
+    ) -> None:
+        """Start new episodes in ``envs``; env e draws from a generator seeded with its seed, or
+        goes on with its own generator when the seed is None. ``theta``, ``weighting``: from
+        :meth:`check_options`. Nothing is written unless every env's start is valid."""
+        sc = self.scenario
+        weighting = self.weighting if weighting is None else weighting
+        drawn = []
+        for e, seed in zip(envs, seeds, strict=True):
+            rng = self.rngs[e]
+            if seed is not None or rng is None:
+                rng, _ = seeding.np_random(seed)
+            start, vel, goals = sc.initial_state(rng)
+            self._check_start(start)
+            th = sc.default_theta(rng) if theta is None else theta[e]
+            drawn.append((e, rng, start, vel, goals, th))
+        s = self.state
+        idx = np.array(envs, dtype=np.int64)
+        for e, rng, start, vel, goals, th in drawn:
+            self.rngs[e] = rng
+            s.positions[e], s.velocities[e], s.goals[e], s.starts[e] = start, vel, goals, start
+            s.theta[e] = th
+            s.weighting[e] = weighting
+        s.omega[idx] = weight_matrix(s.theta[idx], weighting)
+        seg = s.goals[idx] - s.starts[idx]
+        s.frame_angle[idx] = np.arctan2(seg[..., 1], seg[..., 0])
+        self._update_neighbors()
+        s.reached[idx] = sc.at_goal(s.positions[idx], s.goals[idx])
+        self.metrics.reset(idx)
+
+    def _check_start(self, start: NDArray[np.float64]) -> None:
+        """Starting positions must be in the safe set: every pair at least R apart."""
+        d, nb = nearest_neighbors(start, 1)
+        if np.any(d[:, 0] < self.safety_radius):
+            i = int(np.argmin(d[:, 0]))
+            raise ValueError(
+                f"starting positions of agents {i} and {int(nb[i, 0])} overlap: distance "
+                f"{float(d[i, 0])!r} < safety_radius {self.safety_radius} (h < 0)"
+            )
+
+    def _update_neighbors(self) -> None:
+        """Nearest distance and the K nearest neighbours of the current positions."""
+        s = self.state
+        d, idx = nearest_neighbors(s.positions, max(self.k, 1))
+        s.nearest = d[..., 0]
+        s.neighbors = idx[..., : self.k]
+
+    # ---- actions ----------------------------------------------------------------------------
+    def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by
+        u_max, rotate out of the goal frame."""
+        u = nominal.clip_norm(actions, 1.0) * self.u_max
+        if self.frame == "goal":
+            u = nominal.rotate(u, self.state.frame_angle)
+        return u
+
+    def to_actions(self, controls: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Physical controls to the normalised action frame (no clipping)."""
+        u = controls / self.u_max
+        if self.frame == "goal":
+            u = nominal.rotate(u, -self.state.frame_angle)
+        return u
+
+    def nominal_controls(self) -> NDArray[np.float64]:
+        """The scripted controller's physical controls (E, N, 2) for the current state."""
+        return self.scenario.nominal(self.state)
+
+    # ---- the step ---------------------------------------------------------------------------
+    def apply_filters(self, u_nominal: NDArray[np.float64]) -> tuple[NDArray, dict[str, Any]]:
+        """The filter stage: every filter in turn on the state about to be integrated."""
+        s = self.state
+        u, stats = u_nominal, None
+        vel = s.velocities if self.scenario.dynamics == "double_integrator" else None
+        for flt in self.filters:
+            res: FilterResult = flt.apply(s.positions, u, s.theta, vel, s.omega)
+            u = res.actions
+            if stats is None:
+                stats = {
+                    "feasible": res.feasible,
+                    "max_violation": res.max_violation,
+                    "n_unrecoverable_pairs": res.n_unrecoverable_pairs,
+                    "n_capped_shares": res.n_capped_shares,
+                    "min_h": res.min_h,
+                }
+            else:
+                stats["feasible"] = stats["feasible"] & res.feasible
+                stats["max_violation"] = np.maximum(stats["max_violation"], res.max_violation)
+                stats["n_unrecoverable_pairs"] = (
+                    stats["n_unrecoverable_pairs"] + res.n_unrecoverable_pairs
+                )
+                stats["n_capped_shares"] = stats["n_capped_shares"] + res.n_capped_shares
+                stats["min_h"] = np.minimum(stats["min_h"], res.min_h)
+            stats["active"] = res.active
+        return u, stats
+
+    def step(self, actions: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray, NDArray, dict]:
+        """One step of every env on validated normalised actions (E, N, 2).
+
+        Returns observations (E, N, D) float32, rewards (E, N), terminated and truncated (E,),
+        and the per-agent signals (E, N, ...) of :meth:`signals`.
+        """
+        s, sc = self.state, self.scenario
+        u_nominal = self.to_controls(actions)
+        u, stats = self.apply_filters(u_nominal)
+        before = s.positions
+        if sc.dynamics == "double_integrator":
+            s.positions, s.velocities = dynamics.double_integrator_step(
+                s.positions, s.velocities, u, self.dt
+            )
+        else:
+            s.positions = dynamics.single_integrator_step(s.positions, u, self.dt)
+            s.velocities = u.copy()
+        self._update_neighbors()
+        at_goal = sc.at_goal(s.positions, s.goals)
+        rh = sc.right_hand_active(s)
+        self.metrics.update(
+            s.positions - before,
+            s.nearest,
+            rh,
+            passed_midpoint(s.positions, s.starts, s.goals),
+            at_goal,
+            u_nominal,
+            u,
+            stats,
+        )
+        first_arrival = at_goal & ~s.reached
+        s.reached |= at_goal
+        reward = sc.reward(before, s.positions, s.goals, first_arrival, self.reward_weights)
+        intervention = np.linalg.norm(u - u_nominal, axis=-1)
+        penalty = sum(self.penalties)
+        if penalty:
+            reward = reward - penalty * intervention**2
+        terminated = at_goal.all(axis=-1)
+        truncated = ~terminated & (self.metrics.steps >= self.max_steps)
+        signals = self.signals(u_nominal, u, intervention, stats, at_goal, rh)
+        return self.observe(), reward, terminated, truncated, signals
+
+    def signals(
+        self,
+        u_nominal: NDArray | None = None,
+        u_safe: NDArray | None = None,
+        intervention: NDArray | None = None,
+        stats: dict | None = None,
+        at_goal: NDArray | None = None,
+        rh: NDArray | None = None,
+    ) -> dict[str, NDArray]:
+        """Per-agent signals (E, N, ...), the same keys, dtypes and shapes at reset (controls
+        zero, no filter work) and at every step."""
+        s = self.state
+        E, n = s.theta.shape
+        zeros2 = np.zeros((E, n, 2))
+        stats = stats or {}
+        return {
+            "u_nominal": zeros2 if u_nominal is None else u_nominal,
+            "u_safe": zeros2 if u_safe is None else u_safe,
+            "intervention": np.zeros((E, n)) if intervention is None else intervention,
+            "feasible": stats.get("feasible", np.ones((E, n), dtype=bool)),
+            "active_constraints": stats.get("active", np.zeros((E, n), dtype=np.int64)),
+            "max_violation": stats.get("max_violation", np.zeros((E, n))),
+            "min_distance": s.nearest,
+            "cost": collided(s.nearest, self.safety_radius).astype(np.float64),
+            "at_goal": s.reached.copy() if at_goal is None else at_goal,
+            "rh_active": self.scenario.right_hand_active(s) if rh is None else rh,
+        }
+
+    def observe(self, envs: NDArray[np.int64] | None = None) -> NDArray[np.float32]:
+        """Observations (E, N, D) of all envs, or of the given ones."""
+        s = self.state
+        pick = slice(None) if envs is None else envs
+        return observation.observe(
+            s.positions[pick],
+            s.velocities[pick],
+            s.goals[pick],
+            s.theta[pick],
+            s.omega[pick],
+            s.neighbors[pick],
+            s.frame_angle[pick] if self.frame == "goal" else None,
+            self.safety_radius,
+        )

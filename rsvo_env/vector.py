@@ -1,0 +1,161 @@
+"""BatchedEnv: E envs x N agents of one scenario as arrays, the batched adapter over the core.
+
+One :class:`rsvo_env.core.Simulator` steps every env in one array program, the safety filter a
+stage of its step. Env e of ``reset(seed=s)`` is seeded with ``s + e`` and equals, bit for bit,
+an ``RSVOParallelEnv`` reset with seed ``s + e`` (and reset without a seed after each episode).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium
+import numpy as np
+from numpy.typing import NDArray
+
+from rsvo_env import observation
+from rsvo_env.core import Simulator, filter_config
+from rsvo_env.responsibility import Weighting
+from rsvo_env.safety import SafetyFilter
+from rsvo_env.scenarios import Scenario, make_scenario
+from rsvo_env.validation import check_vectors
+
+
+class BatchedEnv:
+    """``num_envs`` copies of a scenario, stepped together, with per-env auto-reset.
+
+    ``reset(seed, options) -> (obs (E, N, D) float32, info)``;
+    ``step(actions (E, N, 2)) -> (obs, reward (E, N), terminated (E,), truncated (E,), info)``.
+    Actions are normalised as in the ParallelEnv (norm clipped to 1, scaled by the speed
+    limit). ``info`` is a dict of arrays, the same keys at every step:
+
+    * every per-agent signal, (E, N, ...): ``u_nominal``, ``u_safe``, ``intervention``,
+      ``feasible``, ``active_constraints``, ``max_violation``, ``min_distance``, ``cost``,
+      ``at_goal``, ``rh_active``;
+    * the running episode's ``episode_steps``, ``episode_success``, ``episode_completed``,
+      ``episode_min_distance``, ``episode_collision_steps``, ``episode_infeasible``, (E,);
+    * ``_final_obs`` (E,): the envs whose episode ended at this step. Those envs are reset on
+      the same step: ``obs`` holds their new episode's first observation, ``final_obs`` their
+      last one (rows of other envs are not meaningful), and the signals and ``episode_*``
+      values of this step are still those of the episode that ended.
+
+    Reset options (``theta``, (N,) or (E, N), and ``weighting``) hold for the auto-resets that
+    follow, until the next ``reset``. Every keyword of ``RSVOParallelEnv`` and of the scenario
+    works here; ``safety_filter=False`` turns the filter off, and ``gamma``, ``solver``,
+    ``intervention_penalty``, ``barrier``, ``split``, ``neighbor_radius`` set it.
+    """
+
+    def __init__(
+        self,
+        scenario: str | Scenario = "crowd",
+        num_envs: int = 1,
+        safety_filter: bool = True,
+        gamma: float | None = None,
+        solver: str = "exact",
+        intervention_penalty: float = 0.0,
+        barrier: str | None = None,
+        split: str | None = None,
+        neighbor_radius: float | None = None,
+        num_obs_neighbors: int | None = None,
+        frame: str = "world",
+        weighting: Weighting = "asymmetric",
+        reward_progress: float = 1.0,
+        reward_time: float = 0.01,
+        reward_goal: float = 10.0,
+        max_cycles: int | None = None,
+        **scenario_kwargs: Any,
+    ) -> None:
+        if max_cycles is not None:
+            if "max_steps" in scenario_kwargs:
+                raise TypeError("give max_steps or its PettingZoo name max_cycles, not both")
+            scenario_kwargs["max_steps"] = max_cycles
+        self.scenario = make_scenario(scenario, **scenario_kwargs)
+        self.sim = Simulator(
+            self.scenario,
+            num_envs=num_envs,
+            num_obs_neighbors=num_obs_neighbors,
+            frame=frame,
+            weighting=weighting,
+            reward_progress=reward_progress,
+            reward_time=reward_time,
+            reward_goal=reward_goal,
+        )
+        if safety_filter:
+            config = filter_config(self.scenario, gamma, solver, barrier, split, neighbor_radius)
+            self.sim.add_filter(SafetyFilter(config), intervention_penalty)
+        elif (gamma, solver, intervention_penalty, barrier, split, neighbor_radius) != (
+            None,
+            "exact",
+            0.0,
+            None,
+            None,
+            None,
+        ):
+            raise TypeError("filter parameters need safety_filter=True")
+        self.num_envs, self.num_agents = self.sim.num_envs, self.sim.n
+        low, high = observation.bounds(self.sim.limits, self.sim.k)
+        self.single_observation_space = gymnasium.spaces.Box(low, high, dtype=np.float32)
+        self.single_action_space = gymnasium.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+        E, N = self.num_envs, self.num_agents
+        self.observation_space = gymnasium.spaces.Box(
+            np.broadcast_to(low, (E, N, len(low))),
+            np.broadcast_to(high, (E, N, len(high))),
+            dtype=np.float32,
+        )
+        self.action_space = gymnasium.spaces.Box(-1.0, 1.0, (E, N, 2), dtype=np.float32)
+        self._reset_args: tuple[NDArray | None, Weighting | None] | None = None
+
+    def reset(
+        self, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, NDArray]]:
+        """Reset every env; env e is seeded with ``seed + e`` (all unseeded: seed None)."""
+        theta, weighting = self.sim.check_options(options)
+        seeds = (
+            [None] * self.num_envs
+            if seed is None
+            else [int(seed) + e for e in range(self.num_envs)]
+        )
+        self.sim.reset(range(self.num_envs), seeds, theta, weighting)
+        self._reset_args = (theta, weighting)
+        obs = self.sim.observe()
+        return obs, self._info(self.sim.signals(), obs, np.zeros(self.num_envs, dtype=bool))
+
+    def step(
+        self, actions: Any
+    ) -> tuple[NDArray[np.float32], NDArray, NDArray[np.bool_], NDArray[np.bool_], dict]:
+        if self._reset_args is None:
+            raise RuntimeError("call reset() before step()")
+        a = check_vectors(actions, "actions", self.num_agents, lead=(self.num_envs,))
+        obs, reward, terminated, truncated, signals = self.sim.step(a)
+        done = terminated | truncated
+        final_obs = obs
+        if done.any():
+            envs = np.flatnonzero(done)
+            final_obs = obs.copy()
+            info = self._info(signals, final_obs, done)
+            theta, weighting = self._reset_args
+            self.sim.reset(envs, [None] * len(envs), theta, weighting)
+            obs[envs] = self.sim.observe(envs)
+            return obs, reward, terminated, truncated, info
+        return obs, reward, terminated, truncated, self._info(signals, final_obs, done)
+
+    def _info(self, signals: dict, final_obs: NDArray, done: NDArray) -> dict[str, NDArray]:
+        info = dict(signals)
+        info.update(self.sim.metrics.flat())
+        info["final_obs"] = final_obs
+        info["_final_obs"] = done
+        return info
+
+    def nominal_actions(self) -> NDArray[np.float32]:
+        """The scripted controller's normalised actions (E, N, 2) for the current state."""
+        return self.sim.to_actions(self.sim.nominal_controls()).astype(np.float32)
+
+    def set_weighting(self, mode: Weighting) -> None:
+        """Weighting of the running and all later episodes."""
+        self.sim.set_weighting(None, mode)
+        self.sim.weighting = mode
+        if self._reset_args is not None:
+            self._reset_args = (self._reset_args[0], mode)
+
+    def close(self) -> None:
+        """Nothing to release; present for the vector-env protocol."""
