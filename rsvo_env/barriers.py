@@ -112,6 +112,22 @@ def candidate_pairs(
     return pairs[:, 0].astype(np.int64), pairs[:, 1].astype(np.int64)
 
 
+@njit(cache=True, inline="always")
+def support(ax, ay, lo0, lo1, hi0, hi1):
+    """``max_{lo <= u <= hi} (ax, ay) . u``: the largest value a row takes over the box."""
+    return max(ax * lo0, ax * hi0) + max(ay * lo1, ay * hi1)
+
+
+@njit(cache=True, inline="always")
+def single_integrator_row(xi0, xi1, xj0, xj1, w, gamma, R2):
+    """Agent i's row against j (paper, eq. ``qp``): ``A = -2 (x_i - x_j)``,
+    ``b = omega_ij gamma h_ij`` with ``h_ij = |x_i - x_j|^2 - R^2``. Returns (ax, ay, b, h)."""
+    dx = xi0 - xj0
+    dy = xi1 - xj1
+    h = (dx * dx + dy * dy) - R2
+    return -2.0 * dx, -2.0 * dy, w * gamma * h, h
+
+
 @njit(cache=True)
 def _pack(n, I, J, A_i, b_i, b_j, h, exists, unrec, capped, lo, hi, cull):
     """Directed rows of both agents of each pair, culled and packed in two O(P) passes.
@@ -128,8 +144,8 @@ def _pack(n, I, J, A_i, b_i, b_j, h, exists, unrec, capped, lo, hi, cull):
         ax = A_i[p, 0]
         ay = A_i[p, 1]
         # box support of +A_i (agent I) and of -A_i (agent J)
-        sup_i = max(ax * lo[0], ax * hi[0]) + max(ay * lo[1], ay * hi[1])
-        sup_j = max(-ax * lo[0], -ax * hi[0]) + max(-ay * lo[1], -ay * hi[1])
+        sup_i = support(ax, ay, lo[0], lo[1], hi[0], hi[1])
+        sup_j = support(-ax, -ay, lo[0], lo[1], hi[0], hi[1])
         if not cull or b_i[p] < sup_i:
             keep[p, 0] = True
             counts[I[p]] += 1
@@ -220,6 +236,37 @@ def _finish(
     )
 
 
+@njit(cache=True)
+def _single_integrator_pairs(x, I, J, w, gamma, R2):
+    """Per pair: ``A_i = -2 dx``, ``h = |dx|^2 - R^2``, ``b = omega gamma h`` for both agents."""
+    P = I.shape[0]
+    A_i = np.empty((P, 2))
+    b_i = np.empty(P)
+    b_j = np.empty(P)
+    h = np.empty(P)
+    for p in range(P):
+        i, j = I[p], J[p]
+        ax, ay, b_i[p], h[p] = single_integrator_row(
+            x[i, 0], x[i, 1], x[j, 0], x[j, 1], w[p, 0], gamma, R2
+        )
+        A_i[p, 0] = ax
+        A_i[p, 1] = ay
+        b_j[p] = w[p, 1] * gamma * h[p]
+    return A_i, b_i, b_j, h
+
+
+@njit(cache=True)
+def omega_pairs(omega, I, J, n):
+    """(P, 2) weights ``omega[e, i, j]``, ``omega[e, j, i]`` of flat pairs (I, J), from the
+    weight matrices flattened to (E * n, n)."""
+    P = I.shape[0]
+    w = np.empty((P, 2))
+    for p in range(P):
+        w[p, 0] = omega[I[p], J[p] % n]
+        w[p, 1] = omega[J[p], I[p] % n]
+    return w
+
+
 def single_integrator_rows(
     positions: NDArray,
     omega_pairs: NDArray,
@@ -237,11 +284,14 @@ def single_integrator_rows(
     other way round; the two sum to 1, so the two rows sum to eq. ``centralized-cbf``.
     """
     n = positions.shape[0]
-    dx = positions[I] - positions[J]
-    h = np.einsum("ij,ij->i", dx, dx) - safety_radius**2
-    A_i = -2.0 * dx
-    b_i = omega_pairs[:, 0] * gamma * h
-    b_j = omega_pairs[:, 1] * gamma * h
+    A_i, b_i, b_j, h = _single_integrator_pairs(
+        np.ascontiguousarray(positions, dtype=np.float64),
+        I,
+        J,
+        np.ascontiguousarray(omega_pairs, dtype=np.float64),
+        float(gamma),
+        float(safety_radius) ** 2,
+    )
     none = np.zeros(len(I), dtype=bool)
     return _finish(n, I, J, A_i, b_i, b_j, h, lo, hi, ~none, none, none, cull)
 

@@ -20,8 +20,8 @@ import numpy as np
 from gymnasium.utils import seeding
 from numpy.typing import NDArray
 
-from rsvo_env import dynamics, nominal, observation
-from rsvo_env.metrics import EpisodeMetrics, collided, passed_midpoint
+from rsvo_env import dynamics, observation, planar
+from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import nearest_neighbors
 from rsvo_env.responsibility import Weighting, weight_matrix
 from rsvo_env.safety import FilterConfig, FilterResult, SafetyFilter
@@ -214,8 +214,8 @@ class Simulator:
         s.omega[idx] = weight_matrix(s.theta[idx], weighting)
         seg = s.goals[idx] - s.starts[idx]
         s.frame_angle[idx] = np.arctan2(seg[..., 1], seg[..., 0])
-        self._update_neighbors()
-        s.reached[idx] = sc.at_goal(s.positions[idx], s.goals[idx])
+        self._derive()
+        s.reached[idx] = s.at_goal[idx]
         self.metrics.reset(idx)
 
     def _check_start(self, start: NDArray[np.float64]) -> None:
@@ -228,27 +228,30 @@ class Simulator:
                 f"{float(d[i, 0])!r} < safety_radius {self.safety_radius} (h < 0)"
             )
 
-    def _update_neighbors(self) -> None:
-        """Nearest distance and the K nearest neighbours of the current positions."""
+    def _derive(self) -> None:
+        """What follows from the current positions, once per state: the nearest distance, the K
+        nearest neighbours, who is at its goal and whom the right-hand rule turns."""
         s = self.state
         d, idx = nearest_neighbors(s.positions, max(self.k, 1))
         s.nearest = d[..., 0]
         s.neighbors = idx[..., : self.k]
+        s.at_goal = self.scenario.at_goal(s.positions, s.goals)
+        s.rh_active = self.scenario.right_hand_active(s)
 
     # ---- actions ----------------------------------------------------------------------------
     def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by
         u_max, rotate out of the goal frame."""
-        u = nominal.clip_norm(actions, 1.0) * self.u_max
+        u = planar.clip_norm(actions, 1.0) * self.u_max
         if self.frame == "goal":
-            u = nominal.rotate(u, self.state.frame_angle)
+            u = planar.rotate(u, self.state.frame_angle)
         return u
 
     def to_actions(self, controls: NDArray[np.float64]) -> NDArray[np.float64]:
         """Physical controls to the normalised action frame (no clipping)."""
         u = controls / self.u_max
         if self.frame == "goal":
-            u = nominal.rotate(u, -self.state.frame_angle)
+            u = planar.rotate(u, -self.state.frame_angle)
         return u
 
     def nominal_controls(self) -> NDArray[np.float64]:
@@ -300,23 +303,15 @@ class Simulator:
         else:
             s.positions = dynamics.single_integrator_step(s.positions, u, self.dt)
             s.velocities = u.copy()
-        self._update_neighbors()
-        at_goal = sc.at_goal(s.positions, s.goals)
-        rh = sc.right_hand_active(s)
+        self._derive()
+        at_goal, rh = s.at_goal, s.rh_active
         self.metrics.update(
-            s.positions - before,
-            s.nearest,
-            rh,
-            passed_midpoint(s.positions, s.starts, s.goals),
-            at_goal,
-            u_nominal,
-            u,
-            stats,
+            before, s.positions, s.starts, s.goals, s.nearest, rh, at_goal, u_nominal, u, stats
         )
         first_arrival = at_goal & ~s.reached
         s.reached |= at_goal
         reward = sc.reward(before, s.positions, s.goals, first_arrival, self.reward_weights)
-        intervention = np.linalg.norm(u - u_nominal, axis=-1)
+        intervention = planar.norm(u - u_nominal)
         penalty = sum(self.penalties)
         if penalty:
             reward = reward - penalty * intervention**2
@@ -349,8 +344,8 @@ class Simulator:
             "max_violation": stats.get("max_violation", np.zeros((E, n))),
             "min_distance": s.nearest,
             "cost": collided(s.nearest, self.safety_radius).astype(np.float64),
-            "at_goal": s.reached.copy() if at_goal is None else at_goal,
-            "rh_active": self.scenario.right_hand_active(s) if rh is None else rh,
+            "at_goal": s.at_goal if at_goal is None else at_goal,
+            "rh_active": s.rh_active if rh is None else rh,
         }
 
     def observe(self, envs: NDArray[np.int64] | None = None) -> NDArray[np.float32]:

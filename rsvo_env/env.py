@@ -17,7 +17,7 @@ from pettingzoo import ParallelEnv
 
 from rsvo_env import observation
 from rsvo_env.core import Simulator
-from rsvo_env.metrics import EpisodeMetrics
+from rsvo_env.metrics import FLAT_FIELDS, EpisodeMetrics
 from rsvo_env.rendering import Renderer
 from rsvo_env.responsibility import Weighting, weight_matrix
 from rsvo_env.safety import SafetyFilter
@@ -112,6 +112,7 @@ class RSVOParallelEnv(ParallelEnv):
         self.renderer: Renderer | None = None
         self.episode_metrics: dict[str, Any] | None = None
         self._started = False
+        self._episode_keys = tuple(f"episode_{name}" for name, _ in FLAT_FIELDS)
 
     # ---- what the core holds, seen for one env ----------------------------------------------
     frame = property(lambda self: self.sim.frame)
@@ -196,17 +197,11 @@ class RSVOParallelEnv(ParallelEnv):
     def _infos(self, signals: dict[str, NDArray]) -> dict[str, dict[str, Any]]:
         """Per-agent infos: each signal's entry for the agent (vectors as rows of one copy per
         field), then the running episode's flat ``episode_*`` values."""
-        keys, columns = [], []
-        for key, value in signals.items():
-            keys.append(key)
-            row = value[0]
-            columns.append(list(row.copy()) if row.ndim == 2 else row.tolist())
-        n = self.sim.n
-        for key, value in self.sim.metrics.flat().items():
-            keys.append(key)
-            columns.append([value[0].item()] * n)
+        columns = [list(v[0].copy()) if v.ndim == 3 else v[0].tolist() for v in signals.values()]
+        keys = (*signals, *self._episode_keys)
+        episode = self.sim.metrics.flat_row(0)
         return {
-            a: dict(zip(keys, vals, strict=True))
+            a: dict(zip(keys, (*vals, *episode), strict=True))
             for a, vals in zip(self.possible_agents, zip(*columns, strict=True), strict=True)
         }
 

@@ -8,6 +8,7 @@ the unshifted positions.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
@@ -29,6 +30,37 @@ def env_offsets(positions: NDArray[np.float64], margin: float = 0.0) -> NDArray[
     return shift
 
 
+@njit(cache=True)
+def _knn_dense(x, k, dist, idx):
+    """k nearest of each agent in its env, by insertion into a sorted list: a strictly smaller
+    squared distance goes first, so ties keep the lower index (a stable sort)."""
+    E, n = x.shape[0], x.shape[1]
+    d2 = np.empty(k)
+    for e in range(E):
+        for i in range(n):
+            m = 0
+            for j in range(n):
+                if j == i:
+                    continue
+                dx = x[e, i, 0] - x[e, j, 0]
+                dy = x[e, i, 1] - x[e, j, 1]
+                v = dx * dx + dy * dy
+                if m == k and v >= d2[k - 1]:
+                    continue
+                p = m if m < k else k - 1
+                while p > 0 and d2[p - 1] > v:
+                    if p < k:
+                        d2[p] = d2[p - 1]
+                        idx[e, i, p] = idx[e, i, p - 1]
+                    p -= 1
+                d2[p] = v
+                idx[e, i, p] = j
+                if m < k:
+                    m += 1
+            for p in range(k):
+                dist[e, i, p] = np.sqrt(d2[p])
+
+
 def nearest_neighbors(
     positions: NDArray[np.float64], k: int
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
@@ -42,14 +74,12 @@ def nearest_neighbors(
     k = min(k, n - 1)
     if k <= 0:
         return np.zeros((*lead, n, 0)), np.zeros((*lead, n, 0), dtype=np.int64)
+    flat = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, n, 2)
     if n <= DENSE_MAX_AGENTS:
-        diff = positions[..., :, None, :] - positions[..., None, :, :]
-        d2 = np.einsum("...ijk,...ijk->...ij", diff, diff)
-        diag = np.arange(n)
-        d2[..., diag, diag] = np.inf
-        idx = np.argsort(d2, axis=-1, kind="stable")[..., :k]
-        return np.sqrt(np.take_along_axis(d2, idx, axis=-1)), idx.astype(np.int64)
-    flat = positions.reshape(-1, n, 2)
+        dist = np.empty((flat.shape[0], n, k))
+        idx = np.empty((flat.shape[0], n, k), dtype=np.int64)
+        _knn_dense(flat, k, dist, idx)
+        return dist.reshape(*lead, n, k), idx.reshape(*lead, n, k)
     E = flat.shape[0]
     shifted = (flat + env_offsets(flat)).reshape(-1, 2)
     _, idx = cKDTree(shifted).query(shifted, k=k + 1)

@@ -11,19 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-
-def clip_norm(u: NDArray[np.float64], limit: float) -> NDArray[np.float64]:
-    """Scale each row of u down to norm <= limit (directions kept), without overflow: a huge
-    finite row such as (1e200, 0) keeps its direction."""
-    norm = np.linalg.norm(u, axis=-1, keepdims=True)
-    if not np.isfinite(norm).all():
-        # |u|^2 overflowed: measure the norm of u scaled by its largest component
-        big = np.max(np.abs(u), axis=-1, keepdims=True)
-        scaled = np.linalg.norm(u / np.where(big > 0, big, 1.0), axis=-1, keepdims=True)
-        return np.where(np.isfinite(norm), u, u / big) * np.minimum(
-            1.0, limit / np.maximum(np.where(np.isfinite(norm), norm, scaled), 1e-300)
-        )
-    return u * np.minimum(1.0, limit / np.maximum(norm, 1e-300))
+from rsvo_env.planar import clip_norm, norm, rotate
 
 
 def move_to_goal(
@@ -41,16 +29,12 @@ def right_hand_active(
     return (nearest < trigger) & ~at_goal
 
 
-def rotate(u: NDArray[np.float64], angle: NDArray[np.float64] | float) -> NDArray[np.float64]:
-    """Rotate each row of u counter-clockwise by ``angle`` radians (negative: clockwise)."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.stack([c * u[..., 0] - s * u[..., 1], s * u[..., 0] + c * u[..., 1]], axis=-1)
-
-
 def right_hand_rule(
     u: NDArray[np.float64], active: NDArray[np.bool_], angle_deg: float
 ) -> NDArray[np.float64]:
     """Rotate the nominal of the active agents clockwise by ``angle_deg``."""
+    if not active.any():
+        return u
     return np.where(active[..., None], rotate(u, -np.deg2rad(angle_deg)), u)
 
 
@@ -73,7 +57,7 @@ def lane_following(
     """
     on_ramp = positions[..., 1] < merge_point[1]
     ramp_dir = merge_point - lane_start
-    ramp_dir = ramp_dir / np.linalg.norm(ramp_dir, axis=-1, keepdims=True)
+    ramp_dir = ramp_dir / norm(ramp_dir)[..., None]
     main_dir = np.array([0.0, 1.0])
     direction = np.where(on_ramp[..., None], ramp_dir, main_dir)
     normal = np.stack([-direction[..., 1], direction[..., 0]], axis=-1)

@@ -11,9 +11,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
-
-from rsvo_env.nominal import rotate
 
 FRAMES = ("world", "goal")
 SQRT2 = float(np.sqrt(2.0))
@@ -76,6 +75,46 @@ def bounds(limits: Limits, k: int) -> tuple[NDArray[np.float32], NDArray[np.floa
     return low, high
 
 
+# The layout the compiled kernel below writes; the tables above are checked against it on
+# import, so they remain the one definition of order, widths and bounds.
+_KERNEL_LAYOUT = (
+    ("goal_offset", 2, "velocity", 2, "theta", 1),
+    ("rel_position", 2, "rel_velocity", 2, "omega", 1, "theta", 1, "gap", 1, "present", 1),
+)
+_TABLES = (OWN_FEATURES, NEIGHBOR_FEATURES)
+if _KERNEL_LAYOUT != tuple(tuple(x for f in t for x in (f.name, f.width)) for t in _TABLES):
+    # pragma: no cover - a table edited without its kernel
+    raise ImportError("observation tables and the observation kernel disagree")
+
+
+@njit(cache=True)
+def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, R, out):
+    E, n, K = nb.shape
+    for e in range(E):
+        for i in range(n):
+            c, s = 1.0, 0.0
+            if use_frame:
+                c, s = np.cos(-frame_angle[e, i]), np.sin(-frame_angle[e, i])
+            gx, gy = goals[e, i, 0] - x[e, i, 0], goals[e, i, 1] - x[e, i, 1]
+            vx, vy = v[e, i, 0], v[e, i, 1]
+            o = out[e, i]
+            o[0], o[1] = c * gx - s * gy, s * gx + c * gy
+            o[2], o[3] = c * vx - s * vy, s * vx + c * vy
+            o[4] = theta[e, i]
+            for k in range(K):
+                j = nb[e, i, k]
+                px, py = x[e, j, 0] - x[e, i, 0], x[e, j, 1] - x[e, i, 1]
+                qx, qy = v[e, j, 0] - vx, v[e, j, 1] - vy
+                b = 5 + 8 * k
+                rx, ry = c * px - s * py, s * px + c * py
+                o[b], o[b + 1] = rx, ry
+                o[b + 2], o[b + 3] = c * qx - s * qy, s * qx + c * qy
+                o[b + 4] = omega[e, i, j]
+                o[b + 5] = theta[e, j]
+                o[b + 6] = np.sqrt(rx * rx + ry * ry) - R
+                o[b + 7] = 1.0
+
+
 def observe(
     positions: NDArray[np.float64],
     velocities: NDArray[np.float64],
@@ -89,27 +128,19 @@ def observe(
     """Observations (E, N, D) float32 of E envs; ``neighbors`` (E, N, K) are local indices.
     ``frame_angle`` (E, N) rotates into each agent's goal frame (None: world frame)."""
     E, n, K = neighbors.shape
-    flat = neighbors + (n * np.arange(E))[:, None, None]
-    x, v = positions, velocities
-    rel_p = x.reshape(-1, 2)[flat] - x[:, :, None, :]
-    rel_v = v.reshape(-1, 2)[flat] - v[:, :, None, :]
-    goal, vel = goals - x, v
-    if frame_angle is not None:
-        ang = -frame_angle
-        goal, vel = rotate(goal, ang), rotate(vel, ang)
-        rel_p = rotate(rel_p, ang[..., None])
-        rel_v = rotate(rel_v, ang[..., None])
-    own = {"goal_offset": goal, "velocity": vel, "theta": theta[..., None]}
-    near = {
-        "rel_position": rel_p,
-        "rel_velocity": rel_v,
-        "omega": np.take_along_axis(omega, neighbors, axis=-1)[..., None],
-        "theta": theta.reshape(-1)[flat][..., None],
-        "gap": (np.linalg.norm(rel_p, axis=-1) - safety_radius)[..., None],
-        "present": np.ones((E, n, K, 1)),
-    }
-    parts = [own[f.name] for f in OWN_FEATURES]
-    parts.append(
-        np.concatenate([near[f.name] for f in NEIGHBOR_FEATURES], axis=-1).reshape(E, n, -1)
+    out = np.empty((E, n, size(K)), dtype=np.float32)
+    use_frame = frame_angle is not None
+    angle = frame_angle if use_frame else np.zeros((E, n))
+    _observe(
+        np.ascontiguousarray(positions),
+        np.ascontiguousarray(velocities),
+        np.ascontiguousarray(goals),
+        np.ascontiguousarray(theta),
+        np.ascontiguousarray(omega),
+        np.ascontiguousarray(neighbors),
+        np.ascontiguousarray(angle),
+        use_frame,
+        float(safety_radius),
+        out,
     )
-    return np.concatenate(parts, axis=-1).astype(np.float32)
+    return out

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env import barriers, solvers
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_distance
+from rsvo_env.planar import norm
 from rsvo_env.responsibility import (
     WEIGHTING_MODES,
     Weighting,
@@ -29,6 +30,7 @@ from rsvo_env.responsibility import (
     validate_weight_matrix,
     weight_matrix,
 )
+from rsvo_env.solvers import dense as dense_solver
 from rsvo_env.validation import check_theta, check_vectors, real_array
 
 DYNAMICS = ("single_integrator", "double_integrator")
@@ -146,7 +148,7 @@ class FilterResult:
     n_rows: NDArray[np.int64]
     n_unrecoverable_pairs: Any
     n_capped_shares: Any
-    rows: barriers.Rows = field(repr=False)
+    rows: barriers.Rows | None = field(repr=False)
 
     def squeeze(self) -> FilterResult:
         """The single-scene result of a batch of one."""
@@ -206,8 +208,7 @@ class SafetyFilter:
         if omega is None and callable(mode):
             omega = weight_matrix(theta, mode)
         if omega is not None:
-            flat = omega.reshape(-1, n)
-            return np.stack([flat[I, J % n], flat[J, I % n]], axis=1)
+            return barriers.omega_pairs(np.ascontiguousarray(omega).reshape(-1, n), I, J, n)
         if mode == "symmetric":
             return np.full((len(I), 2), 0.5)
         th = theta.reshape(-1)
@@ -259,8 +260,8 @@ class SafetyFilter:
             vel = check_vectors(velocities, "velocities", n, lead=lead)
         if single:
             vel = None if vel is None else vel[None]
-            return self.apply(pos[None], nom[None], th[None], vel, W).squeeze()
-        return self.apply(pos, nom, th, vel, W)
+            return self.apply(pos[None], nom[None], th[None], vel, W, with_rows=True).squeeze()
+        return self.apply(pos, nom, th, vel, W, with_rows=True)
 
     def apply(
         self,
@@ -269,15 +270,20 @@ class SafetyFilter:
         theta: NDArray[np.float64],
         velocities: NDArray[np.float64] | None = None,
         omega: NDArray[np.float64] | None = None,
+        with_rows: bool = False,
     ) -> FilterResult:
         """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
 
-        One call of the row builder and one of the solver serve all E x N agents.
+        One call of the row builder and one of the solver serve all E x N agents. Dense
+        single-integrator scenes with the exact solver take one compiled pass
+        (``solvers.dense``, the same arithmetic) unless ``with_rows`` asks for the rows.
         """
         cfg = self.config
         E, n = theta.shape
         pos = positions.reshape(E * n, 2)
         dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
+        if dense and not with_rows and cfg.solver == "exact" and cfg.dynamics == DYNAMICS[0]:
+            return self._apply_dense(positions, nominal, theta, omega)
         if dense:
             # Few agents: every pair, and exact culling drops the rows that cannot bind.
             I, J = barriers.all_pairs(n, E)
@@ -311,7 +317,7 @@ class SafetyFilter:
         return FilterResult(
             actions=actions.reshape(E, n, 2),
             feasible=feasible.reshape(E, n),
-            intervention=np.linalg.norm(actions - nom, axis=-1).reshape(E, n),
+            intervention=norm(actions - nom).reshape(E, n),
             active=active.reshape(E, n),
             min_h=self._min_h(rows, positions, I, dense),
             max_violation=violation.reshape(E, n),
@@ -319,6 +325,29 @@ class SafetyFilter:
             n_unrecoverable_pairs=rows.unrecoverable.reshape(E, -1).sum(axis=-1) // 2,
             n_capped_shares=rows.capped.reshape(E, -1).sum(axis=-1),
             rows=rows,
+        )
+
+    def _apply_dense(
+        self, positions: NDArray, nominal: NDArray, theta: NDArray, omega: NDArray | None
+    ) -> FilterResult:
+        cfg = self.config
+        if omega is None:
+            omega = weight_matrix(theta, cfg.weighting)
+        actions, feasible, active, violation, n_rows, min_h = dense_solver.filter_dense(
+            positions, nominal, omega, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi
+        )
+        zeros = np.zeros(len(min_h), dtype=np.int64)
+        return FilterResult(
+            actions=actions,
+            feasible=feasible,
+            intervention=norm(actions - nominal),
+            active=active,
+            min_h=min_h,
+            max_violation=violation,
+            n_rows=n_rows,
+            n_unrecoverable_pairs=zeros,
+            n_capped_shares=zeros,
+            rows=None,
         )
 
     def _min_h(

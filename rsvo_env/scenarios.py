@@ -13,9 +13,11 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env import nominal
+from rsvo_env.planar import norm
 from rsvo_env.validation import check_positive, check_theta
 
 COMMON_DEFAULTS: dict[str, Any] = {
@@ -114,17 +116,15 @@ class Scenario:
         plus the right-hand rule."""
         u = nominal.move_to_goal(state.positions, state.goals, self.params["k"], self.u_max)
         if self.params["deadlock_resolution"] == "right_hand":
-            u = nominal.right_hand_rule(
-                u, self.right_hand_active(state), self.params["rh_angle_deg"]
-            )
+            u = nominal.right_hand_rule(u, state.rh_active, self.params["rh_angle_deg"])
         return u
 
     def right_hand_active(self, state: Any) -> NDArray[np.bool_]:
-        """(E, N): agents whose nominal the right-hand rule turns (always False without it)."""
+        """(E, N): agents whose nominal the right-hand rule turns (always False without it), from
+        the state's ``nearest`` and ``at_goal``."""
         if self.params["deadlock_resolution"] != "right_hand":
             return np.zeros(state.nearest.shape, dtype=bool)
-        at_goal = self.at_goal(state.positions, state.goals)
-        return nominal.right_hand_active(state.nearest, at_goal, self.rh_trigger)
+        return nominal.right_hand_active(state.nearest, state.at_goal, self.rh_trigger)
 
     def reward(
         self,
@@ -136,7 +136,7 @@ class Scenario:
     ) -> NDArray[np.float64]:
         """Per-agent reward (E, N): progress toward the goal, a time cost, a goal bonus once."""
         progress_w, time_w, goal_w = weights
-        progress = np.linalg.norm(before - goals, axis=-1) - np.linalg.norm(after - goals, axis=-1)
+        progress = norm(before - goals) - norm(after - goals)
         return progress_w * progress - time_w + goal_w * first_arrival
 
     @property
@@ -148,7 +148,7 @@ class Scenario:
 
     def at_goal(self, positions: NDArray, goals: NDArray) -> NDArray[np.bool_]:
         """(..., N): agents within ``goal_tolerance`` of their goals."""
-        return np.linalg.norm(positions - goals, axis=-1) <= self.params["goal_tolerance"]
+        return norm(positions - goals) <= self.params["goal_tolerance"]
 
 
 class PositionSwap(Scenario):
@@ -271,6 +271,47 @@ class RampMerge(Scenario):
         return positions[..., 1] >= self.params["finish_y"]
 
 
+@njit(cache=True)
+def _accept(cand, pts, count, spacing, side):
+    """Append to ``pts[:count]`` each candidate at least ``spacing`` from every accepted point,
+    in order, until ``pts`` is full; a grid of cells of side ``spacing`` (at most 4 points each)
+    makes each test O(1). Returns the new count."""
+    n = pts.shape[0]
+    cells = max(int(np.ceil(side / spacing)), 1)
+    grid = np.full((cells, cells, 4), -1, dtype=np.int64)
+
+    def cell(v):
+        return min(max(int((v + side / 2) / spacing), 0), cells - 1)
+
+    for p in range(count):
+        cx, cy = cell(pts[p, 0]), cell(pts[p, 1])
+        for s in range(4):
+            if grid[cx, cy, s] < 0:
+                grid[cx, cy, s] = p
+                break
+    s2 = spacing * spacing
+    for c in range(cand.shape[0]):
+        if count == n:
+            break
+        x, y = cand[c, 0], cand[c, 1]
+        cx, cy = cell(x), cell(y)
+        ok = True
+        for gx in range(max(cx - 1, 0), min(cx + 2, cells)):
+            for gy in range(max(cy - 1, 0), min(cy + 2, cells)):
+                for s in range(4):
+                    q = grid[gx, gy, s]
+                    if q >= 0 and (pts[q, 0] - x) ** 2 + (pts[q, 1] - y) ** 2 < s2:
+                        ok = False
+        if ok:
+            pts[count, 0], pts[count, 1] = x, y
+            for s in range(4):
+                if grid[cx, cy, s] < 0:
+                    grid[cx, cy, s] = count
+                    break
+            count += 1
+    return count
+
+
 class Crowd(Scenario):
     """N agents with seeded random starts and goals in a square: the stress and scaling case."""
 
@@ -293,18 +334,17 @@ class Crowd(Scenario):
         return self.params["side_factor"] * np.sqrt(self.num_agents) * self.params["safety_radius"]
 
     def _spread(self, rng: np.random.Generator) -> NDArray[np.float64]:
-        """N points uniform in the square, pairwise >= spacing apart (dart throwing in batches)."""
+        """N points uniform in the square, pairwise >= spacing apart: dart throwing in batches,
+        each candidate accepted in draw order (so the layout is a function of the seed alone)
+        against a grid of accepted points, O(N) per batch."""
         n, side = self.num_agents, self.side
         spacing = self.params["spacing_factor"] * self.params["safety_radius"]
-        pts = np.empty((0, 2))
+        pts = np.empty((n, 2))
+        count = 0
         for _ in range(10000):
-            cand = rng.uniform(-side / 2, side / 2, (max(2 * (n - len(pts)), 8), 2))
-            for c in cand:  # sequential acceptance keeps the draw a pure function of the seed
-                if len(pts) == n:
-                    break
-                if len(pts) == 0 or np.min(np.sum((pts - c) ** 2, axis=1)) >= spacing**2:
-                    pts = np.vstack([pts, c])
-            if len(pts) == n:
+            cand = rng.uniform(-side / 2, side / 2, (max(2 * (n - count), 8), 2))
+            count = _accept(cand, pts, count, spacing, side)
+            if count == n:
                 return pts
         raise ValueError(
             f"crowd: could not place {n} agents {spacing} apart in a square of side {side:.3g}; "

@@ -23,8 +23,10 @@ class State:
     """Everything that changes during an episode, batch-first.
 
     ``positions``, ``velocities``, ``goals``, ``starts``: (E, N, 2); ``theta``, ``frame_angle``
-    (each agent's start-to-goal heading), ``nearest`` (distance to the nearest neighbour, of the
-    current positions), ``reached`` (at its goal at least once): (E, N); ``omega``: (E, N, N),
+    (each agent's start-to-goal heading), ``nearest`` (distance to the nearest neighbour),
+    ``at_goal``, ``rh_active`` (the right-hand rule turns the agent's nominal), ``reached`` (at its
+    goal at least once): (E, N), the first three derived from the current positions once per
+    step; ``omega``: (E, N, N),
     recomputed whenever theta or the weighting changes; ``neighbors``: (E, N, K) local indices of
     the K nearest neighbours, nearest first; ``weighting``: the mode of each env.
     """
@@ -37,6 +39,8 @@ class State:
     omega: NDArray[np.float64]
     frame_angle: NDArray[np.float64]
     nearest: NDArray[np.float64]
+    at_goal: NDArray[np.bool_]
+    rh_active: NDArray[np.bool_]
     neighbors: NDArray[np.int64]
     reached: NDArray[np.bool_]
     weighting: list[Weighting]
@@ -53,6 +57,8 @@ class State:
             omega=np.full((E, n, n), 0.5),
             frame_angle=np.zeros((E, n)),
             nearest=np.full((E, n), np.inf),
+            at_goal=np.zeros((E, n), dtype=bool),
+            rh_active=np.zeros((E, n), dtype=bool),
             neighbors=np.zeros((E, n, k), dtype=np.int64),
             reached=np.zeros((E, n), dtype=bool),
             weighting=["asymmetric"] * E,

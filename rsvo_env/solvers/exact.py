@@ -106,27 +106,35 @@ def _max_violation(ux, uy, rows, nrows):
     return worst
 
 
+@njit(cache=True, inline="always")
+def _set_row(rows, k, ax, ay, b):
+    """Store row k normalised to a unit normal (a zero row keeps its right side)."""
+    norm = np.hypot(ax, ay)
+    if norm > 0.0:
+        rows[k, 0] = ax / norm
+        rows[k, 1] = ay / norm
+        rows[k, 2] = b / norm
+    else:
+        rows[k, 0] = 0.0
+        rows[k, 1] = 0.0
+        rows[k, 2] = b
+
+
 @njit(cache=True)
 def _solve_one(nom, A, b, mask, lo, hi, rows, out):
     """One QP; ``rows`` is scratch space. Returns (feasible, active, max_violation)."""
     nrows = 0
     for k in range(A.shape[0]):
-        if not mask[k]:
-            continue
-        ax = A[k, 0]
-        ay = A[k, 1]
-        norm = np.hypot(ax, ay)
-        if norm > 0.0:
-            rows[nrows, 0] = ax / norm
-            rows[nrows, 1] = ay / norm
-            rows[nrows, 2] = b[k] / norm
-        else:
-            rows[nrows, 0] = 0.0
-            rows[nrows, 1] = 0.0
-            rows[nrows, 2] = b[k]
-        nrows += 1
-    lo0, lo1, hi0, hi1 = lo[0], lo[1], hi[0], hi[1]
-    nx, ny = nom[0], nom[1]
+        if mask[k]:
+            _set_row(rows, nrows, A[k, 0], A[k, 1], b[k])
+            nrows += 1
+    return solve_rows(nom[0], nom[1], rows, nrows, lo[0], lo[1], hi[0], hi[1], out)
+
+
+@njit(cache=True)
+def solve_rows(nx, ny, rows, nrows, lo0, lo1, hi0, hi1, out):
+    """The QP of normalised ``rows[:nrows]``; writes the action to ``out``. Returns
+    (feasible, active, max_violation)."""
     ux, uy, ok = _project(nx, ny, rows, nrows, 0.0, lo0, lo1, hi0, hi1)
     violation = 0.0
     if not ok:
