@@ -1,6 +1,7 @@
 """``rsvo reproduce --quick``: the tables' structure, the paper's claims, byte-for-byte reruns."""
 
 import re
+from pathlib import Path
 
 import pytest
 
@@ -26,6 +27,27 @@ def test_rerun_is_byte_identical_but_for_wall_time(runs):
     text_a, text_b = (a / "paper.md").read_text(), (b / "paper.md").read_text()
     assert re.search(r"^Wall time: \d+\.\d s$", text_a, flags=re.M)
     assert strip_wall_time(text_a) == strip_wall_time(text_b)
+
+
+FIXTURE = Path(__file__).parent / "fixtures" / "paper_quick.md"
+
+
+def numbers_of(text):
+    """Every table row, and every decimal number of the prose, but the wall time."""
+    lines = [ln for ln in text.splitlines() if not ln.startswith("Wall time")]
+    tables = [ln for ln in lines if ln.startswith("|")]
+    prose = " ".join(ln for ln in lines if not ln.startswith("|"))
+    return tables, re.findall(r"-?\d+\.\d+", prose)
+
+
+def test_same_numbers_as_before_the_batch_core(runs):
+    """The quick run prints the numbers the pre-batch-core code printed (a committed copy)."""
+    a, _, _ = runs
+    tables, prose = numbers_of((a / "paper.md").read_text())
+    want_tables, want_prose = numbers_of(FIXTURE.read_text())
+    assert len(tables) > 40
+    assert tables == want_tables
+    assert prose == want_prose
 
 
 def test_tables_and_figures(runs):

@@ -1,0 +1,134 @@
+"""BatchedEnv: env e of a batch reset with seed s is, bit for bit, a single RSVOParallelEnv reset
+with seed s + e, through every step and auto-reset; its array API and its errors."""
+
+import numpy as np
+import pytest
+
+import rsvo_env
+import wrappers
+from rsvo_env.vector import BatchedEnv
+
+SIGNALS = (
+    "u_nominal",
+    "u_safe",
+    "intervention",
+    "feasible",
+    "active_constraints",
+    "max_violation",
+    "min_distance",
+    "cost",
+    "at_goal",
+    "rh_active",
+)
+
+
+def stacked(obs, agents):
+    return np.stack([obs[a] for a in agents])
+
+
+@pytest.mark.parametrize("name", ["position_swap", "circular_swap", "ramp_merge", "crowd"])
+@pytest.mark.parametrize("filtered", [False, True], ids=["bare", "filtered"])
+def test_batch_equals_single_envs_bit_for_bit(name, filtered):
+    E, seed, steps = 3, 11, 300
+    kwargs = {"max_steps": 70}  # several episode ends, and so auto-resets, in 300 steps
+    venv = BatchedEnv(name, num_envs=E, safety_filter=filtered, **kwargs)
+    singles = [rsvo_env.parallel_env(name, **kwargs) for _ in range(E)]
+    if filtered:
+        singles = [wrappers.RCBFSafetyFilter(env) for env in singles]
+    obs, info = venv.reset(seed=seed)
+    agents = singles[0].possible_agents
+    for e, env in enumerate(singles):
+        o, inf = env.reset(seed=seed + e)
+        assert np.array_equal(obs[e], stacked(o, agents))
+        for key in SIGNALS:
+            assert np.array_equal(info[key][e], [inf[a][key] for a in agents]), key
+    rng = np.random.default_rng(0)
+    ends = 0
+    for t in range(steps):
+        actions = rng.uniform(-1.2, 1.2, (E, len(agents), 2)).astype(np.float32)
+        obs, reward, term, trunc, info = venv.step(actions)
+        for e, env in enumerate(singles):
+            o, r, te, tr, inf = env.step({a: actions[e, i] for i, a in enumerate(agents)})
+            where = (name, t, e)
+            assert np.array_equal(reward[e], [r[a] for a in agents]), where
+            assert term[e] == te[agents[0]] and trunc[e] == tr[agents[0]], where
+            for key in SIGNALS:
+                assert np.array_equal(info[key][e], [inf[a][key] for a in agents]), (key, where)
+            for key in inf[agents[0]]:
+                if key.startswith("episode_"):
+                    assert info[key][e] == inf[agents[0]][key], (key, where)
+            assert info["_final_obs"][e] == (te[agents[0]] or tr[agents[0]]), where
+            if info["_final_obs"][e]:
+                ends += 1
+                assert np.array_equal(info["final_obs"][e], stacked(o, agents)), where
+                o, _ = env.reset()
+            assert np.array_equal(obs[e], stacked(o, agents)), where
+    assert ends >= E * 3
+
+
+def test_spaces_and_shapes():
+    venv = BatchedEnv("crowd", num_envs=4, num_agents=5, num_obs_neighbors=3)
+    obs, info = venv.reset(seed=0)
+    assert obs.shape == (4, 5, 5 + 8 * 3) and obs.dtype == np.float32
+    assert venv.single_observation_space.shape == (5 + 8 * 3,)
+    assert venv.single_action_space.shape == (2,)
+    assert venv.observation_space.contains(obs)
+    assert venv.num_envs == 4 and venv.num_agents == 5
+    obs, reward, term, trunc, info = venv.step(venv.nominal_actions())
+    assert reward.shape == (4, 5) and term.shape == trunc.shape == (4,)
+    assert info["u_safe"].shape == (4, 5, 2) and info["episode_steps"].shape == (4,)
+    assert all(isinstance(v, np.ndarray) for v in info.values())
+
+
+def test_reset_options_hold_for_auto_resets():
+    venv = BatchedEnv("position_swap", num_envs=2, max_steps=5)
+    venv.reset(seed=0, options={"theta": [[1.0, 4.0], [2.0, 2.0]], "weighting": "symmetric"})
+    assert np.allclose(venv.sim.state.omega[:, 0, 1], 0.5)
+    for _ in range(6):  # past an auto-reset
+        venv.step(np.zeros((2, 2, 2)))
+    np.testing.assert_array_equal(venv.sim.state.theta, [[1.0, 4.0], [2.0, 2.0]])
+    assert np.allclose(venv.sim.state.omega[:, 0, 1], 0.5)
+    venv.reset(seed=0, options={"theta": [1.0, 4.0]})  # one row for every env
+    np.testing.assert_array_equal(venv.sim.state.theta, [[1.0, 4.0], [1.0, 4.0]])
+
+
+@pytest.mark.parametrize(
+    "actions,pattern",
+    [
+        (np.zeros((2, 3, 2)), r"actions has shape \(2, 3, 2\), expected \(2, 2, 2\)"),
+        (np.full((2, 2, 2), "1"), "actions must be real numbers"),
+        (np.array([[[0, 0], [0, 0]], [[0, 0], [np.nan, 0]]]), r"actions\[1\]\[1\].*env 1, agent 1"),
+    ],
+)
+def test_bad_actions_name_env_and_agent_and_change_nothing(actions, pattern):
+    venv = BatchedEnv("position_swap", num_envs=2)
+    venv.reset(seed=0)
+    before = venv.sim.state.positions.copy()
+    with pytest.raises(ValueError, match=pattern):
+        venv.step(actions)
+    np.testing.assert_array_equal(venv.sim.state.positions, before)
+    assert venv.sim.metrics.steps.tolist() == [0, 0]
+
+
+def test_step_before_reset_and_bad_construction():
+    venv = BatchedEnv("crowd", num_envs=2)
+    with pytest.raises(RuntimeError, match="reset"):
+        venv.step(np.zeros((2, 12, 2)))
+    with pytest.raises(ValueError, match=r"num_envs = 0"):
+        BatchedEnv("crowd", num_envs=0)
+    with pytest.raises(ValueError, match=r"num_envs = 2.5"):
+        BatchedEnv("crowd", num_envs=2.5)
+    with pytest.raises(TypeError, match="safety_filter=True"):
+        BatchedEnv("crowd", num_envs=2, safety_filter=False, gamma=3.0)
+    with pytest.raises(TypeError, match="unknown keyword"):
+        BatchedEnv("crowd", num_envs=2, nmu_agents=3)
+
+
+def test_filtered_batch_is_safe():
+    venv = BatchedEnv("crowd", num_envs=16, num_agents=16, max_steps=200)
+    venv.reset(seed=3)
+    for _ in range(400):
+        x = venv.sim.state.positions
+        to_centre = -x / np.maximum(np.linalg.norm(x, axis=-1, keepdims=True), 1e-9)
+        _, _, _, _, info = venv.step(to_centre)
+        assert info["min_distance"].min() >= 1.0 - 1e-9 and info["feasible"].all()
