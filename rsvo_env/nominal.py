@@ -3,7 +3,7 @@
 The paper's nominal controller is ``u = -k (x - x_target)`` (Sec. V-A), scaled here to the speed
 limit. The paper uses a "right hand heuristic rule" against deadlock without defining it; ours
 rotates the nominal clockwise by a fixed angle while a neighbour is within a trigger distance
-(DESIGN.md section 5).
+(`docs/scenarios.md`).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The ids, in gymnasium's registry (JointControlEnv) and PettingZoo's (the filtered ParallelEnv).
 
-Entry points are strings (DESIGN.md section 1): the core names the wrappers here and nowhere
+Entry points are strings (docs/api.md): the core names the wrappers here and nowhere
 else, and they are imported only when ``make`` is called.
 """
 

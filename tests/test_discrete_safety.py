@@ -1,6 +1,6 @@
 """Discrete-time safety of the single integrator: x += dt u with gamma dt <= 1 never collides.
 
-DESIGN.md section 3: each pair's rows sum to 2 dx.(u_i - u_j) >= -gamma h, and then
+docs/math.md: each pair's rows sum to 2 dx.(u_i - u_j) >= -gamma h, and then
 h+ = h + 2 dt dx.(u_i - u_j) + dt^2 |u_i - u_j|^2 >= (1 - gamma dt) h >= 0.
 """
 

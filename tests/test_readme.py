@@ -20,3 +20,13 @@ def test_readme_has_the_quickstart():
 @pytest.mark.parametrize("index", range(len(BLOCKS)))
 def test_readme_block_runs(index, capsys):
     exec(compile(BLOCKS[index], f"README.md block {index}", "exec"), {})
+
+
+def test_ci_runs_exactly_the_readme_test_command():
+    """README says its test command is exactly what .ci/run does; hold it to that."""
+    root = Path(__file__).resolve().parents[1]
+    block = README.split("The tests (this is exactly what `.ci/run` does)", 1)[1]
+    command = block.split("```bash\n", 1)[1].split("```", 1)[0].strip()
+    script = (root / ".ci" / "run").read_text().splitlines()
+    steps = [ln.strip() for ln in script if ln.strip() and not ln.startswith(("#", "set ", "cd "))]
+    assert command == " && ".join(steps)

@@ -20,7 +20,7 @@ def test_ruff_clean():
 
 
 def test_core_does_not_import_upper_floors():
-    """DESIGN.md section 1: rsvo_env (but its cli/) never imports wrappers, training,
+    """The one-way data flow: rsvo_env (but its cli/) never imports wrappers, training,
     benchmarks or stable_baselines3."""
     forbidden = ("wrappers", "training", "benchmarks", "stable_baselines3")
     offenders = []
