@@ -16,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+import gymnasium
 import numpy as np
 from gymnasium.utils import seeding
 from numpy.typing import NDArray
@@ -25,11 +26,43 @@ from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import nearest_neighbors
 from rsvo_env.responsibility import Weighting, weight_matrix
 from rsvo_env.safety import FilterConfig, FilterResult, SafetyFilter
-from rsvo_env.scenarios import Scenario
+from rsvo_env.scenarios import Scenario, make_scenario
 from rsvo_env.state import State
 from rsvo_env.validation import check_real
 
 RESET_OPTIONS = ("theta", "weighting")
+SIM_KEYWORDS = (
+    "num_obs_neighbors",
+    "frame",
+    "weighting",
+    "reward_progress",
+    "reward_time",
+    "reward_goal",
+)
+FILTER_KEYWORDS = ("gamma", "solver", "barrier", "split", "neighbor_radius")
+
+
+def make_simulator(
+    scenario: str | Scenario,
+    num_envs: int = 1,
+    max_cycles: int | None = None,
+    record_series: bool = False,
+    **kwargs: Any,
+) -> Simulator:
+    """The core for a scenario (name or instance). ``kwargs`` holds the simulator's keywords
+    (:data:`SIM_KEYWORDS`) and the scenario's parameters; ``max_cycles`` is PettingZoo's name for
+    ``max_steps``. Both adapters are built through here."""
+    if max_cycles is not None:
+        if "max_steps" in kwargs:
+            raise TypeError("give max_steps or its PettingZoo name max_cycles, not both")
+        kwargs["max_steps"] = max_cycles
+    sim_kwargs = {k: kwargs.pop(k) for k in SIM_KEYWORDS if k in kwargs}
+    return Simulator(
+        make_scenario(scenario, **kwargs),
+        num_envs=num_envs,
+        record_series=record_series,
+        **sim_kwargs,
+    )
 
 
 def filter_config(
@@ -126,6 +159,14 @@ class Simulator:
         self.limits = observation.Limits(*self._extent(), p["theta_max"], self.safety_radius)
 
     # ---- configuration ----------------------------------------------------------------------
+    def spaces(self) -> tuple[gymnasium.spaces.Box, gymnasium.spaces.Box]:
+        """One agent's observation and action spaces (bounded Boxes, float32)."""
+        low, high = observation.bounds(self.limits, self.k)
+        return (
+            gymnasium.spaces.Box(low, high, dtype=np.float32),
+            gymnasium.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32),
+        )
+
     def _extent(self) -> tuple[float, float]:
         """Finite bounds on every position and velocity component reachable in an episode."""
         sc = self.scenario
@@ -242,7 +283,7 @@ class Simulator:
     def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by
         u_max, rotate out of the goal frame."""
-        u = planar.clip_norm(actions, 1.0) * self.u_max
+        u = planar.clip_norm(actions, 1.0, self.u_max)
         if self.frame == "goal":
             u = planar.rotate(u, self.state.frame_angle)
         return u

@@ -15,13 +15,12 @@ from gymnasium.utils import seeding
 from numpy.typing import NDArray
 from pettingzoo import ParallelEnv
 
-from rsvo_env import observation
-from rsvo_env.core import Simulator
+from rsvo_env.core import make_simulator
 from rsvo_env.metrics import FLAT_FIELDS, EpisodeMetrics
 from rsvo_env.rendering import Renderer
 from rsvo_env.responsibility import Weighting, weight_matrix
 from rsvo_env.safety import SafetyFilter
-from rsvo_env.scenarios import Scenario, make_scenario
+from rsvo_env.scenarios import Scenario
 from rsvo_env.state import World
 from rsvo_env.validation import check_action_dict
 
@@ -68,51 +67,30 @@ class RSVOParallelEnv(ParallelEnv):
         self,
         scenario: str | Scenario = "circular_swap",
         render_mode: str | None = None,
-        num_obs_neighbors: int | None = None,
-        frame: str = "world",
-        weighting: Weighting = "asymmetric",
-        reward_progress: float = 1.0,
-        reward_time: float = 0.01,
-        reward_goal: float = 10.0,
         render_size: int = 600,
-        max_cycles: int | None = None,
-        **scenario_kwargs: Any,
+        **kwargs: Any,
     ) -> None:
-        if max_cycles is not None:
-            if "max_steps" in scenario_kwargs:
-                raise TypeError("give max_steps or its PettingZoo name max_cycles, not both")
-            scenario_kwargs["max_steps"] = max_cycles
-        self.scenario = make_scenario(scenario, **scenario_kwargs)
+        """``kwargs``: ``num_obs_neighbors``, ``frame``, ``weighting``, ``reward_progress``,
+        ``reward_time``, ``reward_goal``, ``max_cycles``, and every scenario parameter."""
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode = {render_mode!r}; use one of {self.metadata['render_modes']}"
             )
-        self.sim = Simulator(
-            self.scenario,
-            num_envs=1,
-            num_obs_neighbors=num_obs_neighbors,
-            frame=frame,
-            weighting=weighting,
-            reward_progress=reward_progress,
-            reward_time=reward_time,
-            reward_goal=reward_goal,
-            record_series=True,
-        )
+        self.sim = make_simulator(scenario, num_envs=1, record_series=True, **kwargs)
+        self.scenario = self.sim.scenario
         self.render_mode = render_mode
         self.render_size = int(render_size)
         n = self.scenario.num_agents
         self.possible_agents = [f"agent_{i}" for i in range(n)]
         self.agents: list[str] = []
-        low, high = observation.bounds(self.sim.limits, self.sim.k)
-        obs_space = gymnasium.spaces.Box(low, high, dtype=np.float32)
-        act_space = gymnasium.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+        obs_space, act_space = self.sim.spaces()
         self.observation_spaces = {a: obs_space for a in self.possible_agents}
         self.action_spaces = {a: act_space for a in self.possible_agents}
         self.history: list[NDArray[np.float64]] = []
         self.renderer: Renderer | None = None
         self.episode_metrics: dict[str, Any] | None = None
         self._started = False
-        self._episode_keys = tuple(f"episode_{name}" for name, _ in FLAT_FIELDS)
+        self._info_keys: tuple[str, ...] | None = None
 
     # ---- what the core holds, seen for one env ----------------------------------------------
     frame = property(lambda self: self.sim.frame)
@@ -197,12 +175,15 @@ class RSVOParallelEnv(ParallelEnv):
     def _infos(self, signals: dict[str, NDArray]) -> dict[str, dict[str, Any]]:
         """Per-agent infos: each signal's entry for the agent (vectors as rows of one copy per
         field), then the running episode's flat ``episode_*`` values."""
+        if self._info_keys is None:
+            self._info_keys = (*signals, *(f"episode_{name}" for name, _ in FLAT_FIELDS))
+        keys = self._info_keys
         columns = [list(v[0].copy()) if v.ndim == 3 else v[0].tolist() for v in signals.values()]
-        keys = (*signals, *self._episode_keys)
         episode = self.sim.metrics.flat_row(0)
+        # every column has one entry per agent: zip needs no length check
         return {
-            a: dict(zip(keys, (*vals, *episode), strict=True))
-            for a, vals in zip(self.possible_agents, zip(*columns, strict=True), strict=True)
+            a: dict(zip(keys, (*vals, *episode), strict=False))
+            for a, vals in zip(self.possible_agents, zip(*columns, strict=False), strict=False)
         }
 
     # ---- scripted controller -----------------------------------------------------------------

@@ -11,14 +11,14 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.planar import clip_norm, norm, rotate
+from rsvo_env.planar import clip_norm, norm, rotate_where, toward
 
 
 def move_to_goal(
     positions: NDArray[np.float64], goals: NDArray[np.float64], k: float, u_max: float
 ) -> NDArray[np.float64]:
     """``u = -k (x - goal)``, scaled to norm <= u_max (paper, Sec. V-A)."""
-    return clip_norm(-k * (positions - goals), u_max)
+    return toward(positions, goals, k, u_max)
 
 
 def right_hand_active(
@@ -33,9 +33,7 @@ def right_hand_rule(
     u: NDArray[np.float64], active: NDArray[np.bool_], angle_deg: float
 ) -> NDArray[np.float64]:
     """Rotate the nominal of the active agents clockwise by ``angle_deg``."""
-    if not active.any():
-        return u
-    return np.where(active[..., None], rotate(u, -np.deg2rad(angle_deg)), u)
+    return rotate_where(u, active, -np.deg2rad(angle_deg))
 
 
 def lane_following(

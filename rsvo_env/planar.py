@@ -6,6 +6,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
@@ -37,25 +39,73 @@ def rotate(u: NDArray[np.float64], angle: NDArray[np.float64] | float) -> NDArra
     return out.reshape(np.shape(u))
 
 
+@njit(cache=True, inline="always")
+def clip2(x, y, limit):
+    """(x, y) scaled down to norm <= limit, overflow-safe (see :func:`clip_norm`)."""
+    length = np.sqrt(x * x + y * y)
+    if not np.isfinite(length):
+        # |u|^2 overflowed: scale by the largest component first
+        big = max(abs(x), abs(y))
+        x, y = x / big, y / big
+        length = np.sqrt(x * x + y * y)
+    factor = min(1.0, limit / max(length, 1e-300))
+    return x * factor, y * factor
+
+
 @njit(cache=True)
-def _clip(flat, limit, out):
+def _clip(flat, limit, scale, out):
+    for i in range(flat.shape[0]):
+        x, y = clip2(flat[i, 0], flat[i, 1], limit)
+        out[i, 0], out[i, 1] = x * scale, y * scale
+
+
+@njit(cache=True)
+def _turn(flat, active, c, s, out):
     for i in range(flat.shape[0]):
         x, y = flat[i, 0], flat[i, 1]
-        length = np.sqrt(x * x + y * y)
-        if not np.isfinite(length):
-            # |u|^2 overflowed: scale by the largest component first
-            big = max(abs(x), abs(y))
-            x, y = x / big, y / big
-            length = np.sqrt(x * x + y * y)
-        factor = min(1.0, limit / max(length, 1e-300))
-        out[i, 0] = x * factor
-        out[i, 1] = y * factor
+        if active[i]:
+            out[i, 0], out[i, 1] = c * x - s * y, s * x + c * y
+        else:
+            out[i, 0], out[i, 1] = x, y
 
 
-def clip_norm(u: NDArray[np.float64], limit: float) -> NDArray[np.float64]:
-    """Scale each row of u (..., 2) down to norm <= limit (directions kept), without overflow: a
-    huge finite row such as (1e200, 0) keeps its direction."""
+@functools.lru_cache(maxsize=32)
+def _cos_sin(angle: float) -> tuple[float, float]:
+    return float(np.cos(angle)), float(np.sin(angle))
+
+
+def rotate_where(
+    u: NDArray[np.float64], active: NDArray[np.bool_], angle: float
+) -> NDArray[np.float64]:
+    """Rotate the rows of u (..., 2) where ``active`` (...) by one fixed ``angle``."""
+    c, s = _cos_sin(float(angle))
     flat = np.ascontiguousarray(u, dtype=np.float64).reshape(-1, 2)
     out = np.empty_like(flat)
-    _clip(flat, float(limit), out)
+    _turn(flat, np.ascontiguousarray(active).reshape(-1), c, s, out)
+    return out.reshape(np.shape(u))
+
+
+@njit(cache=True)
+def _toward(x, g, k, limit, out):
+    for i in range(x.shape[0]):
+        out[i, 0], out[i, 1] = clip2(-k * (x[i, 0] - g[i, 0]), -k * (x[i, 1] - g[i, 1]), limit)
+
+
+def toward(
+    positions: NDArray[np.float64], goals: NDArray[np.float64], k: float, limit: float
+) -> NDArray[np.float64]:
+    """``-k (x - goal)`` per row, clipped to norm <= limit."""
+    x = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 2)
+    g = np.ascontiguousarray(np.broadcast_to(goals, positions.shape)).reshape(-1, 2)
+    out = np.empty_like(x)
+    _toward(x, g, float(k), float(limit), out)
+    return out.reshape(positions.shape)
+
+
+def clip_norm(u: NDArray[np.float64], limit: float, scale: float = 1.0) -> NDArray[np.float64]:
+    """Scale each row of u (..., 2) down to norm <= limit (directions kept), then multiply by
+    ``scale``; without overflow: a huge finite row such as (1e200, 0) keeps its direction."""
+    flat = np.ascontiguousarray(u, dtype=np.float64).reshape(-1, 2)
+    out = np.empty_like(flat)
+    _clip(flat, float(limit), float(scale), out)
     return out.reshape(np.shape(u))

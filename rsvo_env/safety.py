@@ -128,7 +128,7 @@ class FilterConfig:
             )
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class FilterResult:
     """What the filter decided for each agent (the ``certify_action`` contract: action + flag).
 
@@ -333,14 +333,16 @@ class SafetyFilter:
         cfg = self.config
         if omega is None:
             omega = weight_matrix(theta, cfg.weighting)
-        actions, feasible, active, violation, n_rows, min_h = dense_solver.filter_dense(
-            positions, nominal, omega, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi
+        actions, feasible, active, violation, n_rows, min_h, intervention = (
+            dense_solver.filter_dense(
+                positions, nominal, omega, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi
+            )
         )
         zeros = np.zeros(len(min_h), dtype=np.int64)
         return FilterResult(
             actions=actions,
             feasible=feasible,
-            intervention=norm(actions - nominal),
+            intervention=intervention,
             active=active,
             min_h=min_h,
             max_violation=violation,

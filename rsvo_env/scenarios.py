@@ -30,6 +30,16 @@ COMMON_DEFAULTS: dict[str, Any] = {
 DEADLOCK_RESOLUTIONS = ("right_hand", "none")
 
 
+@njit(cache=True)
+def _reward_terms(before, after, goals, first, progress_w, time_w, goal_w, out):
+    """Per agent: ``progress_w (|before - goal| - |after - goal|) - time_w + goal_w first``."""
+    for i in range(before.shape[0]):
+        bx, by = before[i, 0] - goals[i, 0], before[i, 1] - goals[i, 1]
+        ax, ay = after[i, 0] - goals[i, 0], after[i, 1] - goals[i, 1]
+        progress = np.sqrt(bx * bx + by * by) - np.sqrt(ax * ax + ay * ay)
+        out[i] = progress_w * progress - time_w + goal_w * (1.0 if first[i] else 0.0)
+
+
 class Scenario:
     """Base class: parameters, initial state, nominal controller, arena."""
 
@@ -135,9 +145,17 @@ class Scenario:
         weights: tuple[float, float, float],
     ) -> NDArray[np.float64]:
         """Per-agent reward (E, N): progress toward the goal, a time cost, a goal bonus once."""
-        progress_w, time_w, goal_w = weights
-        progress = norm(before - goals) - norm(after - goals)
-        return progress_w * progress - time_w + goal_w * first_arrival
+        shape = first_arrival.shape
+        out = np.empty(int(np.prod(shape)))
+        _reward_terms(
+            np.ascontiguousarray(before).reshape(-1, 2),
+            np.ascontiguousarray(after).reshape(-1, 2),
+            np.ascontiguousarray(goals).reshape(-1, 2),
+            np.ascontiguousarray(first_arrival).reshape(-1),
+            *weights,
+            out,
+        )
+        return out.reshape(shape)
 
     @property
     def rh_trigger(self) -> float:

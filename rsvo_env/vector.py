@@ -13,11 +13,10 @@ import gymnasium
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env import observation
-from rsvo_env.core import Simulator, filter_config
+from rsvo_env.core import FILTER_KEYWORDS, filter_config, make_simulator
 from rsvo_env.responsibility import Weighting
 from rsvo_env.safety import SafetyFilter
-from rsvo_env.scenarios import Scenario, make_scenario
+from rsvo_env.scenarios import Scenario
 from rsvo_env.validation import check_vectors
 
 
@@ -50,52 +49,26 @@ class BatchedEnv:
         scenario: str | Scenario = "crowd",
         num_envs: int = 1,
         safety_filter: bool = True,
-        gamma: float | None = None,
-        solver: str = "exact",
         intervention_penalty: float = 0.0,
-        barrier: str | None = None,
-        split: str | None = None,
-        neighbor_radius: float | None = None,
-        num_obs_neighbors: int | None = None,
-        frame: str = "world",
-        weighting: Weighting = "asymmetric",
-        reward_progress: float = 1.0,
-        reward_time: float = 0.01,
-        reward_goal: float = 10.0,
-        max_cycles: int | None = None,
-        **scenario_kwargs: Any,
+        **kwargs: Any,
     ) -> None:
-        if max_cycles is not None:
-            if "max_steps" in scenario_kwargs:
-                raise TypeError("give max_steps or its PettingZoo name max_cycles, not both")
-            scenario_kwargs["max_steps"] = max_cycles
-        self.scenario = make_scenario(scenario, **scenario_kwargs)
-        self.sim = Simulator(
-            self.scenario,
-            num_envs=num_envs,
-            num_obs_neighbors=num_obs_neighbors,
-            frame=frame,
-            weighting=weighting,
-            reward_progress=reward_progress,
-            reward_time=reward_time,
-            reward_goal=reward_goal,
-        )
+        """``kwargs``: the filter's ``gamma``, ``solver``, ``barrier``, ``split``,
+        ``neighbor_radius``; ``num_obs_neighbors``, ``frame``, ``weighting``, ``reward_*``,
+        ``max_cycles``; and every scenario parameter."""
+        filter_kwargs = {k: kwargs.pop(k) for k in FILTER_KEYWORDS if k in kwargs}
+        self.sim = make_simulator(scenario, num_envs=num_envs, **kwargs)
+        self.scenario = self.sim.scenario
         if safety_filter:
-            config = filter_config(self.scenario, gamma, solver, barrier, split, neighbor_radius)
+            config = filter_config(self.scenario, **filter_kwargs)
             self.sim.add_filter(SafetyFilter(config), intervention_penalty)
-        elif (gamma, solver, intervention_penalty, barrier, split, neighbor_radius) != (
-            None,
-            "exact",
-            0.0,
-            None,
-            None,
-            None,
-        ):
-            raise TypeError("filter parameters need safety_filter=True")
+        elif filter_kwargs or intervention_penalty:
+            raise TypeError(
+                f"filter parameters {sorted(filter_kwargs) or ['intervention_penalty']} need "
+                "safety_filter=True"
+            )
         self.num_envs, self.num_agents = self.sim.num_envs, self.sim.n
-        low, high = observation.bounds(self.sim.limits, self.sim.k)
-        self.single_observation_space = gymnasium.spaces.Box(low, high, dtype=np.float32)
-        self.single_action_space = gymnasium.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+        self.single_observation_space, self.single_action_space = self.sim.spaces()
+        low, high = self.single_observation_space.low, self.single_observation_space.high
         E, N = self.num_envs, self.num_agents
         self.observation_space = gymnasium.spaces.Box(
             np.broadcast_to(low, (E, N, len(low))),

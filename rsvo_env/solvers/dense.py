@@ -17,7 +17,9 @@ from rsvo_env.solvers.exact import PARALLEL_THRESHOLD, solve_rows
 
 
 @njit(cache=True, inline="always")
-def _one_env(e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, violation, n_rows):
+def _one_env(
+    e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, violation, n_rows, moved
+):  # fmt: skip
     n = x.shape[1]
     lo0, lo1, hi0, hi1 = lo[0], lo[1], hi[0], hi[1]
     min_h = np.inf
@@ -41,25 +43,31 @@ def _one_env(e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, v
             nom[e, i, 0], nom[e, i, 1], rows, k, lo0, lo1, hi0, hi1, out[e, i]
         )
         feasible[e, i], active[e, i], violation[e, i], n_rows[e, i] = ok, act, vio, k
+        dx, dy = out[e, i, 0] - nom[e, i, 0], out[e, i, 1] - nom[e, i, 1]
+        moved[e, i] = np.sqrt(dx * dx + dy * dy)
     return min_h
 
 
 @njit(cache=True)
-def _serial(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, n_rows, min_h):
+def _serial(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, n_rows, min_h,
+            moved):  # fmt: skip
     rows = np.empty((max(x.shape[1] - 1, 1), 3))
     for e in range(x.shape[0]):
         min_h[e] = _one_env(
-            e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, violation, n_rows
-        )
+            e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, violation, n_rows,
+            moved,
+        )  # fmt: skip
 
 
 @njit(cache=True, parallel=True)
-def _parallel(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, n_rows, min_h):
+def _parallel(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, n_rows, min_h,
+              moved):  # fmt: skip
     for e in prange(x.shape[0]):
         rows = np.empty((max(x.shape[1] - 1, 1), 3))
         min_h[e] = _one_env(
-            e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, violation, n_rows
-        )
+            e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, violation, n_rows,
+            moved,
+        )  # fmt: skip
 
 
 def filter_dense(
@@ -70,12 +78,12 @@ def filter_dense(
     safety_radius: float,
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
-) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
     """Safe single-integrator controls of E envs x N agents, every pair of an env examined.
 
     positions, nominal (E, N, 2); omega (E, N, N). Returns actions (E, N, 2), feasible,
-    active row count, largest normalised violation, rows kept after culling (E, N), and each
-    env's smallest barrier value (E,).
+    active row count, largest normalised violation, rows kept after culling (E, N), each env's
+    smallest barrier value (E,), and the intervention |u_safe - u_nominal| (E, N).
     """
     E, n = positions.shape[:2]
     out = np.empty((E, n, 2))
@@ -84,6 +92,7 @@ def filter_dense(
     violation = np.empty((E, n))
     n_rows = np.empty((E, n), dtype=np.int64)
     min_h = np.empty(E)
+    moved = np.empty((E, n))
     kernel = _parallel if E * n >= PARALLEL_THRESHOLD else _serial
     kernel(
         np.ascontiguousarray(positions, dtype=np.float64),
@@ -99,5 +108,6 @@ def filter_dense(
         violation,
         n_rows,
         min_h,
+        moved,
     )
-    return out, feasible, active, violation, n_rows, min_h
+    return out, feasible, active, violation, n_rows, min_h, moved
