@@ -1,11 +1,19 @@
-"""The paper's reproduction; the same code as ``rsvo reproduce`` (it lives in rsvo_env/cli).
+"""The paper's reproduction as committed in this checkout: ``rsvo reproduce`` (the same code,
+in rsvo_env/cli) writing to benchmarks/results and refreshing README's results block.
 
-python benchmarks/reproduce_paper.py [--quick] [--out DIR] [--seed N]
+python benchmarks/reproduce_paper.py [--quick] [--seed N]
 """
 
 import sys
+from pathlib import Path
 
 from rsvo_env.cli.reproduce import main
 
+ROOT = Path(__file__).resolve().parents[1]
+
 if __name__ == "__main__":
-    sys.exit(main())
+    args = sys.argv[1:]
+    defaults = ["--out", str(ROOT / "benchmarks" / "results")]
+    if "--quick" not in args:
+        defaults += ["--readme", str(ROOT / "README.md")]
+    sys.exit(main(defaults + args))

@@ -13,6 +13,7 @@ Each env has its own seeded generator; this class is the one writer of the state
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -24,7 +25,7 @@ from numpy.typing import NDArray
 from rsvo_env import dynamics, observation, planar
 from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import nearest_neighbors
-from rsvo_env.responsibility import Weighting, weight_matrix
+from rsvo_env.responsibility import Weighting, smallest_weight, weight_matrix
 from rsvo_env.safety import FilterConfig, FilterResult, SafetyFilter
 from rsvo_env.scenarios import Scenario, make_scenario
 from rsvo_env.state import State
@@ -151,6 +152,7 @@ class Simulator:
         }
         self.filters: list[SafetyFilter] = []
         self.penalties: list[float] = []
+        self._warned_options: set[str] = set()
         self.rngs: list[np.random.Generator | None] = [None] * self.num_envs
         self.state = State.empty(self.num_envs, n, self.k)
         self.metrics = EpisodeMetrics(
@@ -196,6 +198,7 @@ class Simulator:
         th = self.scenario.check_theta(theta)
         omega = weight_matrix(th, self.state.weighting[e])
         self.state.theta[e], self.state.omega[e] = th, omega
+        self.state.omega_min[e] = smallest_weight(omega)
 
     def set_weighting(self, e: int | None, weighting: Weighting) -> None:
         """Weighting of env e's running episode (all envs: None)."""
@@ -203,12 +206,21 @@ class Simulator:
         omegas = [weight_matrix(self.state.theta[i], weighting) for i in envs]
         for i, omega in zip(envs, omegas, strict=True):
             self.state.omega[i], self.state.weighting[i] = omega, weighting
+            self.state.omega_min[i] = smallest_weight(omega)
 
     # ---- episodes ---------------------------------------------------------------------------
     def check_options(self, options: dict | None) -> tuple[NDArray | None, Weighting]:
         """Theta (E, N) or None, and the weighting, from reset options; other keys are left for
         wrappers (PettingZoo's own API test passes one of its own)."""
         options = options or {}
+        unknown = sorted(set(options) - set(RESET_OPTIONS) - self._warned_options)
+        if unknown:
+            # not an error: PettingZoo's API test passes an option of its own
+            self._warned_options.update(unknown)
+            warnings.warn(
+                f"reset options {unknown} are not used by rsvo_env; it reads {list(RESET_OPTIONS)}",
+                stacklevel=3,
+            )
         theta = None
         if "theta" in options:
             raw = np.asarray(options["theta"])
@@ -253,6 +265,7 @@ class Simulator:
             s.theta[e] = th
             s.weighting[e] = weighting
         s.omega[idx] = weight_matrix(s.theta[idx], weighting)
+        s.omega_min[idx] = smallest_weight(s.omega[idx])
         seg = s.goals[idx] - s.starts[idx]
         s.frame_angle[idx] = np.arctan2(seg[..., 1], seg[..., 0])
         self._derive()
@@ -306,7 +319,9 @@ class Simulator:
         u, stats = u_nominal, None
         vel = s.velocities if self.scenario.dynamics == "double_integrator" else None
         for flt in self.filters:
-            res: FilterResult = flt.apply(s.positions, u, s.theta, vel, s.omega)
+            res: FilterResult = flt.apply(
+                s.positions, u, s.theta, vel, s.omega, omega_min=s.omega_min, nearest=s.nearest
+            )
             u = res.actions
             if stats is None:
                 stats = {

@@ -219,15 +219,36 @@ class RSVOParallelEnv(ParallelEnv):
                 self.render_mode,
                 size=self.render_size,
                 fps=self.metadata["render_fps"],
+                lanes=self.scenario.lanes(),
+                caption=f"{self.scenario.name}, {self.sim.state.weighting[0]} weighting, "
+                + ("filter on" if self.sim.filters else "no filter"),
             )
         s = self.sim.state
         self.renderer.draw(
-            s.positions[0], s.goals[0], s.theta[0], self.sim.safety_radius, self.history
+            s.positions[0],
+            s.goals[0],
+            s.theta[0],
+            self.sim.safety_radius,
+            self.history,
+            time=self.sim.metrics.steps[0] * self.sim.dt,
         )
         if self.render_mode == "rgb_array":
             return self.renderer.frame()
         self.renderer.show()
         return None
+
+    def __getstate__(self) -> dict[str, Any]:
+        # pygame surfaces cannot be copied or pickled: a copy makes its own on its next render()
+        state = self.__dict__.copy()
+        state["renderer"] = None
+        return state
+
+    def __repr__(self) -> str:
+        filters = ", ".join(f"gamma={f.config.gamma:g} {f.config.solver}" for f in self.sim.filters)
+        return (
+            f"RSVOParallelEnv({self.scenario.name!r}, num_agents={self.sim.n}, "
+            f"filter={'[' + filters + ']' if filters else 'off'})"
+        )
 
     def close(self) -> None:
         if self.renderer is not None:

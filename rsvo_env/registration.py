@@ -9,6 +9,8 @@ from __future__ import annotations
 import gymnasium
 import pettingzoo
 
+from rsvo_env.scenarios import SCENARIOS
+
 IDS = {
     "rsvo/PositionSwap-v0": "position_swap",
     "rsvo/CircularSwap-v0": "circular_swap",
@@ -22,7 +24,10 @@ def register_all() -> None:
         kwargs = {"scenario": scenario}
         if env_id not in gymnasium.registry:
             gymnasium.register(
-                id=env_id, entry_point="wrappers.joint:JointControlEnv", kwargs=kwargs
+                id=env_id,
+                entry_point="wrappers.joint:JointControlEnv",
+                kwargs=kwargs,
+                max_episode_steps=SCENARIOS[scenario].defaults["max_steps"],
             )
         for env_type, registry, factory in (
             ("parallel", pettingzoo.parallel_registry, "filtered_parallel_env"),

@@ -16,16 +16,25 @@ ALTRUIST = np.array([40, 90, 220])
 BACKGROUND = (250, 250, 248)
 
 
-def theta_colors(theta: NDArray[np.float64]) -> NDArray[np.uint8]:
-    """One RGB colour per agent, from egoist (red, small theta) to altruist (blue).
+def theta_scale(theta: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each agent's place in [0, 1] between the group's most egoistic (smallest theta, 0) and
+    most altruistic (1) member; equal scores are all 0.5."""
+    lo, hi = float(np.min(theta)), float(np.max(theta))
+    return np.full(len(theta), 0.5) if hi <= lo else (np.asarray(theta) - lo) / (hi - lo)
 
-    The position on the scale is the agent's R-SVO share against the group's mean score,
-    ``theta_i / (theta_i + mean theta)``, so equal scores are all the middle colour.
-    """
-    mean = float(np.mean(theta)) if len(theta) else 0.0
-    total = theta + mean
-    share = np.where(total > 0, theta / np.where(total > 0, total, 1.0), 0.5)
+
+def theta_colors(theta: NDArray[np.float64]) -> NDArray[np.uint8]:
+    """One RGB colour per agent, from egoist (red, smallest theta) to altruist (blue)."""
+    share = theta_scale(theta)
     return np.round(EGOIST + (ALTRUIST - EGOIST) * share[:, None]).astype(np.uint8)
+
+
+def role(theta: NDArray[np.float64], i: int) -> str:
+    """' (egoist)' for the group's smallest theta, ' (altruist)' for its largest, else ''."""
+    lo, hi = float(np.min(theta)), float(np.max(theta))
+    if hi <= lo:
+        return ""
+    return " (egoist)" if theta[i] == lo else " (altruist)" if theta[i] == hi else ""
 
 
 class Renderer:
@@ -38,6 +47,8 @@ class Renderer:
         size: int = 600,
         fps: int = 50,
         trail: int = 400,
+        lanes: Sequence[NDArray] = (),
+        caption: str = "",
     ) -> None:
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
         import pygame
@@ -45,11 +56,19 @@ class Renderer:
         self.pygame = pygame
         self.mode = mode
         lo, hi = (np.asarray(a, dtype=np.float64) for a in arena)
+        # a narrow arena (the ramp merge) is widened so that the captions fit beside it
+        span = hi - lo
+        grow = np.maximum(0.6 * span[::-1] - span, 0.0) / 2
+        lo, hi = lo - grow, hi + grow
         span = hi - lo
         self.scale = size / float(span.max())
         self.width = int(np.ceil(span[0] * self.scale))
         self.height = int(np.ceil(span[1] * self.scale))
         self.lo, self.fps, self.trail = lo, fps, trail
+        self.lanes = [self.to_screen(np.asarray(line, dtype=np.float64)) for line in lanes]
+        self.caption = caption
+        pygame.font.init()
+        self.font = pygame.font.Font(None, max(16, max(self.width, self.height) // 24))
         self.surface = pygame.Surface((self.width, self.height))
         self.window = None
         self.clock = None
@@ -75,10 +94,14 @@ class Renderer:
         theta: NDArray,
         safety_radius: float,
         history: Sequence[NDArray] = (),
+        time: float | None = None,
     ) -> None:
+        """Lanes, trails, goals (crosses) and agents (safety disc, theta colour) at ``time``."""
         pg = self.pygame
         surf = self.surface
         surf.fill(BACKGROUND)
+        for line in self.lanes:
+            pg.draw.lines(surf, (180, 180, 180), False, line, 3)
         colors = theta_colors(theta)
         r_px = max(2, int(round(0.5 * safety_radius * self.scale)))
         if len(history) > 1:
@@ -98,6 +121,15 @@ class Renderer:
             surf.blit(halo, (int(p[0]) - r_px - 1, int(p[1]) - r_px - 1))
             pg.draw.circle(surf, c, (int(p[0]), int(p[1])), r_px, 2)  # safety circle, R/2
             pg.draw.circle(surf, c, (int(p[0]), int(p[1])), max(2, r_px // 4))
+        # short lines, so that narrow arenas (the ramp merge) show them whole
+        top = ([] if time is None else [f"t = {time:.2f} s"]) + self.caption.split(", ")
+        for k, text in enumerate(t for t in top if t):
+            line = self.font.render(text, True, (40, 40, 40))
+            surf.blit(line, (6, 4 + k * self.font.get_linesize()))
+        key = ["x: goal", "blue: altruist", "red: egoist (small theta)"]
+        for k, text in enumerate(key):
+            line = self.font.render(text, True, (90, 90, 90))
+            surf.blit(line, (6, self.height - (k + 1) * self.font.get_linesize() - 4))
 
     def frame(self) -> NDArray[np.uint8]:
         arr = self.pygame.surfarray.array3d(self.surface)  # (W, H, 3)
@@ -118,13 +150,37 @@ class Renderer:
 
 
 def save_gif(frames: Sequence[NDArray[np.uint8]], path: str | Path, fps: int = 25) -> Path:
-    """Write frames (H, W, 3) to an animated GIF."""
+    """Write frames (H, W, 3) to an animated GIF that plays at ``fps`` frames per second."""
     import imageio.v2 as imageio
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    imageio.mimsave(path, list(frames), duration=1.0 / fps, loop=0)
+    # imageio's GIF writer takes the frame duration in milliseconds (GIF stores centiseconds)
+    imageio.mimsave(path, list(frames), duration=1000.0 / fps, loop=0)
     return path
+
+
+MARK_STYLES = (":", "-.", "--")
+
+
+def marker_handles(mark_labels: Sequence[str] = ()) -> list[Any]:
+    """Legend entries that explain :func:`plot_trajectories`' markers."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    grey = "0.35"
+    handles = [
+        Line2D([], [], ls="none", marker="o", mfc="white", mec=grey, label="start"),
+        Patch(color=grey, alpha=0.35, label="final position (disc: R/2; number: agent)"),
+        Line2D([], [], ls="none", marker="x", color=grey, label="goal"),
+        Line2D([], [], ls="--", color=grey, lw=1, label="path"),
+    ]
+    for k, text in enumerate(mark_labels):
+        handles.append(
+            Patch(facecolor=grey, alpha=0.2, edgecolor="k", linestyle=MARK_STYLES[k % 3],
+                  label=text)
+        )  # fmt: skip
+    return handles
 
 
 def plot_trajectories(
@@ -135,34 +191,60 @@ def plot_trajectories(
     ax: Any = None,
     title: str | None = None,
     marks: Sequence[int] = (),
+    mark_labels: Sequence[str] = (),
+    legend: bool | str = True,
+    colorbar: bool = True,
 ) -> Any:
-    """A figure like the paper's: paths (dashed), final positions with safety circles, goals.
-
-    ``trajectory`` is (T, N, 2). ``marks`` are step indices at which the agents are also drawn
-    (faded), e.g. deadlock onset and resolution.
+    """A figure like the paper's, readable without the code: each agent's path (dashed, coloured
+    by theta from egoist red to altruist blue, with a colour bar), its start (hollow circle), its
+    final position (a disc of radius R/2 with the agent's number in it) and its goal (cross).
+    ``marks`` are steps at which the agents are also drawn (faded discs), named by
+    ``mark_labels`` in the legend (e.g. deadlock onset, resolution). ``legend="agents"`` keeps
+    only the agents' entries (for panels that share :func:`marker_handles` in one figure legend).
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.colors import LinearSegmentedColormap, Normalize
 
     if ax is None:
-        _, ax = plt.subplots(figsize=(5, 5))
+        _, ax = plt.subplots(figsize=(6.5, 5.5))
+    theta = np.asarray(theta, dtype=float)
     colors = theta_colors(theta) / 255.0
-    n = trajectory.shape[1]
-    for i in range(n):
-        ax.plot(trajectory[:, i, 0], trajectory[:, i, 1], "--", color=colors[i], lw=1)
-        for t in marks:
+    styles = MARK_STYLES
+    handles = []
+    for i in range(trajectory.shape[1]):
+        (line,) = ax.plot(trajectory[:, i, 0], trajectory[:, i, 1], "--", color=colors[i], lw=1)
+        line.set_label(f"agent {i + 1}: theta = {theta[i]:.3g}{role(theta, i)}")
+        handles.append(line)
+        for k, t in enumerate(marks):
             if 0 <= t < len(trajectory):
                 ax.add_patch(
-                    plt.Circle(trajectory[t, i], safety_radius / 2, color=colors[i], alpha=0.15)
-                )
+                    plt.Circle(trajectory[t, i], safety_radius / 2, facecolor=colors[i],
+                               alpha=0.12, edgecolor="k", linestyle=styles[k % 3], lw=0.6)
+                )  # fmt: skip
+        ax.plot(*trajectory[0, i], "o", mfc="white", mec=colors[i], ms=6)
         ax.add_patch(plt.Circle(trajectory[-1, i], safety_radius / 2, color=colors[i], alpha=0.35))
+        ax.annotate(str(i + 1), trajectory[-1, i], fontsize=8, ha="center", va="center")
         ax.plot(*goals[i], "x", color=colors[i])
-        ax.annotate(str(i + 1), trajectory[0, i], fontsize=8, ha="center", va="center")
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
+    if legend == "agents":
+        ax.legend(handles=handles, fontsize=6, loc="upper left")
+    elif legend:
+        handles += marker_handles(mark_labels)
+        # below the axes, where it hides no path
+        ax.legend(
+            handles=handles, fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2
+        )
+    if colorbar:
+        cmap = LinearSegmentedColormap.from_list("theta", [EGOIST / 255.0, ALTRUIST / 255.0])
+        lo, hi = float(theta.min()), float(theta.max())
+        norm = Normalize(lo, hi if hi > lo else lo + 1.0)
+        bar = ax.figure.colorbar(plt.cm.ScalarMappable(norm, cmap), ax=ax, shrink=0.8)
+        bar.set_label("theta: red egoist (small), blue altruist (large)", fontsize=7)
     if title:
         ax.set_title(title, fontsize=9)
     return ax.figure

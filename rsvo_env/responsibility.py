@@ -154,3 +154,14 @@ def min_pair_weight(theta: NDArray[np.float64], mode: Weighting) -> float:
         return float(pair_omega(order[-1], order[0]))
     w = weight_matrix(theta, mode)
     return float(w[~np.eye(len(theta), dtype=bool)].min())
+
+
+def smallest_weight(omega: NDArray[np.float64]) -> NDArray[np.float64] | float:
+    """Smallest off-diagonal omega of each (N, N) matrix of (..., N, N); 0.5 for one agent."""
+    n = omega.shape[-1]
+    if n < 2:
+        return np.full(omega.shape[:-2], 0.5) if omega.ndim > 2 else 0.5
+    w = omega.copy()
+    d = np.arange(n)
+    w[..., d, d] = np.inf
+    return w.min(axis=(-2, -1))

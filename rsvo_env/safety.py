@@ -27,6 +27,7 @@ from rsvo_env.responsibility import (
     Weighting,
     min_pair_weight,
     pair_omega,
+    smallest_weight,
     validate_weight_matrix,
     weight_matrix,
 )
@@ -174,15 +175,18 @@ class SafetyFilter:
             raise TypeError("pass either a FilterConfig or keyword arguments, not both")
         self.config = config if config is not None else FilterConfig(**kwargs)  # type: ignore[arg-type]
 
-    def pair_radius(self, theta: NDArray, omega: NDArray | None) -> float:
-        """Radius of the pair search: the sensing radius (single integrator) or the user's."""
+    def pair_radius(
+        self, theta: NDArray, omega: NDArray | None, omega_min: NDArray | None = None
+    ) -> float:
+        """Radius of the pair search: the sensing radius (single integrator) or the user's.
+        ``omega_min``: each scene's smallest weight, when the caller keeps it."""
         cfg = self.config
         if cfg.dynamics == "double_integrator":
             return cfg.neighbor_radius if cfg.neighbor_radius is not None else float("inf")
-        if omega is not None:
-            n = omega.shape[-1]
-            off = ~np.eye(n, dtype=bool)
-            w_min = float(omega[..., off].min()) if n > 1 else 0.5
+        if omega_min is not None:
+            w_min = float(np.min(omega_min))
+        elif omega is not None:
+            w_min = float(np.min(smallest_weight(omega)))
         else:
             th = theta.reshape(-1, theta.shape[-1])
             w_min = min(min_pair_weight(t, cfg.weighting) for t in th)
@@ -271,12 +275,16 @@ class SafetyFilter:
         velocities: NDArray[np.float64] | None = None,
         omega: NDArray[np.float64] | None = None,
         with_rows: bool = False,
+        omega_min: NDArray[np.float64] | None = None,
+        nearest: NDArray[np.float64] | None = None,
     ) -> FilterResult:
         """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
 
         One call of the row builder and one of the solver serve all E x N agents. Dense
         single-integrator scenes with the exact solver take one compiled pass
-        (``solvers.dense``, the same arithmetic) unless ``with_rows`` asks for the rows.
+        (``solvers.dense``, the same arithmetic) unless ``with_rows`` asks for the rows. A caller
+        that keeps them passes each scene's smallest weight ``omega_min`` (E,) and each agent's
+        nearest distance ``nearest`` (E, N), which the large-N path needs.
         """
         cfg = self.config
         E, n = theta.shape
@@ -288,7 +296,8 @@ class SafetyFilter:
             # Few agents: every pair, and exact culling drops the rows that cannot bind.
             I, J = barriers.all_pairs(n, E)
         else:
-            I, J = barriers.candidate_pairs(positions, self.pair_radius(theta, omega))
+            radius = self.pair_radius(theta, omega, omega_min)
+            I, J = barriers.candidate_pairs(positions, radius)
         weights = self.pair_weights(theta, omega, I, J)
         if cfg.dynamics == "single_integrator":
             rows = barriers.single_integrator_rows(
@@ -319,7 +328,7 @@ class SafetyFilter:
             feasible=feasible.reshape(E, n),
             intervention=norm(actions - nom).reshape(E, n),
             active=active.reshape(E, n),
-            min_h=self._min_h(rows, positions, I, dense),
+            min_h=self._min_h(rows, positions, I, dense, nearest),
             max_violation=violation.reshape(E, n),
             n_rows=rows.mask.sum(axis=-1).reshape(E, n),
             n_unrecoverable_pairs=rows.unrecoverable.reshape(E, -1).sum(axis=-1) // 2,
@@ -353,7 +362,12 @@ class SafetyFilter:
         )
 
     def _min_h(
-        self, rows: barriers.Rows, positions: NDArray, I: NDArray, dense: bool
+        self,
+        rows: barriers.Rows,
+        positions: NDArray,
+        I: NDArray,
+        dense: bool,
+        nearest: NDArray | None = None,
     ) -> NDArray[np.float64]:
         """(E,) smallest barrier value of each scene over the pairs examined; for the single
         integrator beyond the dense size, over all pairs (the nearest pair may lie outside the
@@ -366,6 +380,6 @@ class SafetyFilter:
         out = np.full(E, np.inf)
         np.minimum.at(out, I // n, rows.pair_h)
         if self.config.dynamics == "single_integrator":
-            nearest = nearest_distance(positions).min(axis=-1)
-            out = np.minimum(out, nearest**2 - self.config.safety_radius**2)
+            d = (nearest_distance(positions) if nearest is None else nearest).min(axis=-1)
+            out = np.minimum(out, d**2 - self.config.safety_radius**2)
         return out

@@ -46,6 +46,8 @@ class Scenario:
     name: ClassVar[str] = ""
     dynamics: ClassVar[str] = "single_integrator"
     defaults: ClassVar[dict[str, Any]] = {}
+    # a scenario laid out for a fixed number of agents (None: any number >= 2)
+    fixed_agents: ClassVar[int | None] = None
 
     def __init__(self, **kwargs: Any) -> None:
         params = {**COMMON_DEFAULTS, **self.defaults}
@@ -53,6 +55,14 @@ class Scenario:
         if unknown:
             raise TypeError(
                 f"{self.name}() got unknown keyword argument(s) {unknown}; known: {sorted(params)}"
+            )
+        if self.fixed_agents is not None and kwargs.get("num_agents", self.fixed_agents) != (
+            self.fixed_agents
+        ):
+            raise ValueError(
+                f"{self.name} is laid out for exactly {self.fixed_agents} agents; "
+                f"num_agents = {kwargs['num_agents']!r} is not possible (use crowd or "
+                "circular_swap for other counts)"
             )
         params.update(kwargs)
         self.params = params
@@ -121,6 +131,10 @@ class Scenario:
         """A box (lo, hi) that holds every start and goal, for drawing and observation bounds."""
         raise NotImplementedError
 
+    def lanes(self) -> list[NDArray[np.float64]]:
+        """Polylines (K, 2) a picture of the scenario draws under the agents (none here)."""
+        return []
+
     def nominal(self, state: Any) -> NDArray[np.float64]:
         """Scripted nominal controls (E, N, 2) in physical units: move-to-goal (paper, Sec. V-A)
         plus the right-hand rule."""
@@ -173,6 +187,7 @@ class PositionSwap(Scenario):
     """Two agents swap corners (paper, Sec. V-A, Fig. 3)."""
 
     name = "position_swap"
+    fixed_agents = 2
     defaults = {
         "num_agents": 2,
         "start": ((-4.0, -4.0), (4.0, 4.0)),
@@ -232,6 +247,7 @@ class RampMerge(Scenario):
 
     name = "ramp_merge"
     dynamics = "double_integrator"
+    fixed_agents = 2
     defaults = {
         "num_agents": 2,
         "merge_point": (0.0, 70.0),
@@ -255,6 +271,11 @@ class RampMerge(Scenario):
         a = np.deg2rad(self.params["lane_angle_deg"])
         d = self.params["start_distance"]
         return m + d * np.array([[-np.sin(a), -np.cos(a)], [np.sin(a), -np.cos(a)]])
+
+    def lanes(self):
+        m = np.array(self.params["merge_point"], dtype=np.float64)
+        end = np.array([m[0], self.params["finish_y"]])
+        return [np.stack([s, m]) for s in self.lane_starts()] + [np.stack([m, end])]
 
     def initial_state(self, rng):
         start = self.lane_starts()

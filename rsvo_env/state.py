@@ -27,7 +27,8 @@ class State:
     ``at_goal``, ``rh_active`` (the right-hand rule turns the agent's nominal), ``reached`` (at its
     goal at least once): (E, N), the first three derived from the current positions once per
     step; ``omega``: (E, N, N),
-    recomputed whenever theta or the weighting changes; ``neighbors``: (E, N, K) local indices of
+    recomputed whenever theta or the weighting changes, with ``omega_min`` (E,) its smallest
+    off-diagonal entry; ``neighbors``: (E, N, K) local indices of
     the K nearest neighbours, nearest first; ``weighting``: the mode of each env.
     """
 
@@ -37,6 +38,7 @@ class State:
     starts: NDArray[np.float64]
     theta: NDArray[np.float64]
     omega: NDArray[np.float64]
+    omega_min: NDArray[np.float64]
     frame_angle: NDArray[np.float64]
     nearest: NDArray[np.float64]
     at_goal: NDArray[np.bool_]
@@ -55,6 +57,7 @@ class State:
             starts=np.zeros((E, n, 2)),
             theta=np.ones((E, n)),
             omega=np.full((E, n, n), 0.5),
+            omega_min=np.full(E, 0.5),
             frame_angle=np.zeros((E, n)),
             nearest=np.full((E, n), np.inf),
             at_goal=np.zeros((E, n), dtype=bool),

@@ -1,19 +1,43 @@
 """``rsvo reproduce --quick``: the tables' structure, the paper's claims, byte-for-byte reruns."""
 
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
+from PIL import Image
 
-from rsvo_env.cli import main as cli
 from rsvo_env.cli.reproduce import reproduce
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def checkout_state():
+    """What a run must not touch: README and the committed results."""
+    files = [ROOT / "README.md", *sorted((ROOT / "benchmarks" / "results").iterdir())]
+    return {str(f): f.read_bytes() for f in files}
 
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    a = tmp_path_factory.mktemp("a")
+    """The command as a user runs it, from a folder outside the checkout, and the function."""
+    elsewhere = tmp_path_factory.mktemp("elsewhere")
+    before = checkout_state()
+    out = subprocess.run(
+        [sys.executable, "-m", "rsvo_env.cli", "reproduce", "--quick"],
+        cwd=elsewhere,
+        capture_output=True,
+        text=True,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert checkout_state() == before  # the checkout is untouched
+    a = elsewhere / "rsvo-results"
+    written = [
+        ln.removeprefix("wrote ") for ln in out.stdout.splitlines() if ln.startswith("wrote ")
+    ]
+    assert sorted(Path(w).name for w in written) == sorted(p.name for p in a.iterdir())
     b = tmp_path_factory.mktemp("b")
-    assert cli.main(["reproduce", "--quick", "--out", str(a)]) == 0
     res = reproduce(b, quick=True)
     return a, b, res
 
@@ -96,3 +120,42 @@ def test_the_papers_claims_hold(runs):
     assert cap["egoist_first"] == cap["unequal"] > 0
     assert cap["unsafe"] == 0 and cap["infeasible"] == 0
     assert pap["egoist_first"] == 0  # the literal split makes the egoist yield
+
+
+def test_figures_explain_themselves(runs):
+    """The trajectory figure names every agent with its theta and role, every marker, the
+    marked events, and has a colour bar for theta (read back from the matplotlib artists)."""
+    import matplotlib.pyplot as plt
+
+    from rsvo_env.cli.figures import event_marks
+    from rsvo_env.rendering import plot_trajectories
+
+    out = runs[2]["circular"]["runs"]["asym"]
+    marks, labels = event_marks(out)
+    fig = plot_trajectories(
+        out["trajectory"], out["goals"], out["theta"], 1.0, marks=marks, mark_labels=labels
+    )
+    ax = fig.axes[0]
+    entries = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "agent 1: theta = 2 (altruist)" in entries
+    assert "agent 2: theta = 1 (egoist)" in entries
+    for text in ("start", "goal", "path", "final position (disc: R/2; number: agent)"):
+        assert text in entries
+    assert f"positions at deadlock onset (step {out['deadlock_onset']})" in entries
+    assert f"positions at resolved (step {out['deadlock_resolved']})" in entries
+    bar = fig.axes[1]  # the colour bar's axes
+    assert "egoist" in bar.get_ylabel() and "altruist" in bar.get_ylabel()
+    numbers = {t.get_text() for t in ax.texts}
+    assert numbers == {str(i + 1) for i in range(6)}  # each label sits on its agent's disc
+    plt.close(fig)
+
+
+def test_gif_frames_have_real_durations(runs):
+    a, _, _ = runs
+    gif = Image.open(a / "circular_asymmetric.gif")
+    durations = []
+    for k in range(gif.n_frames):
+        gif.seek(k)
+        durations.append(gif.info["duration"])
+    # rsvo simulate writes every 5th step of dt = 0.01 s: 20 frames per second, 50 ms each
+    assert gif.n_frames > 10 and set(durations) == {50}

@@ -9,28 +9,45 @@ import numpy as np
 from rsvo_env.cli.studies import defaults
 from rsvo_env.cli.studies.position_swap import RADII, WEIGHTS
 from rsvo_env.cli.studies.ramp_merge import CASES
-from rsvo_env.rendering import plot_trajectories
+from rsvo_env.rendering import marker_handles, plot_trajectories, role
 
 
 def position_swap(runs: dict, path: Path) -> None:
     """Fig. 3: trajectories of each radius (rows) and weight split (columns)."""
     import matplotlib.pyplot as plt
+    from matplotlib.colors import LinearSegmentedColormap, Normalize
 
-    fig, axes = plt.subplots(2, 3, figsize=(12, 8))
+    from rsvo_env.rendering import ALTRUIST, EGOIST
+
+    fig, axes = plt.subplots(2, 3, figsize=(13, 9), layout="constrained")
     for (R, w1), out in runs.items():
         ax = axes[RADII.index(R), WEIGHTS.index(w1)]
-        marks = [out["deadlock_onset"]] if out["deadlock_onset"] else []
+        onset = out["deadlock_onset"]
         plot_trajectories(
             out["trajectory"],
             out["goals"],
             out["theta"],
             R,
             ax=ax,
-            marks=marks,
-            title=f"R_safe = {R:g}, omega = {w1:.1f} / {1 - w1:.1f}",
+            marks=[onset] if onset else [],
+            legend="agents",
+            colorbar=False,
+            title=f"R_safe {R:g}, omega_1 / omega_2 = {w1:.1f} / {1 - w1:.1f}"
+            + (f"\nthey meet at step {onset}" if onset else ""),
         )
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    cmap = LinearSegmentedColormap.from_list("theta", [EGOIST / 255.0, ALTRUIST / 255.0])
+    bar = fig.colorbar(plt.cm.ScalarMappable(Normalize(0, 1), cmap), ax=axes, shrink=0.6)
+    bar.set_ticks(
+        [0, 1], labels=["egoist\n(smaller theta,\nlarger omega)", "altruist\n(larger theta)"]
+    )
+    fig.suptitle("position_swap, asymmetric weighting, filter on (paper Fig. 3)")
+    fig.legend(
+        handles=marker_handles(["positions when the agents meet (the right-hand rule fires)"]),
+        loc="outside lower center",
+        ncol=5,
+        fontsize=8,
+    )
+    fig.savefig(path, dpi=100, bbox_inches="tight")
     plt.close(fig)
 
 
@@ -49,36 +66,52 @@ def ramp_merge(runs: dict, path: Path) -> None:
                 np.arange(len(traj)) * p["dt"],
                 traj[:, i, 1],
                 style,
-                label=f"V{i + 1} (theta {out['theta'][i]:g})",
+                label=f"V{i + 1} ({'left' if i == 0 else 'right'} lane), "
+                f"theta {out['theta'][i]:g}{role(out['theta'], i)}",
             )
-        ax.axhline(merge_y, color="grey", lw=0.8)
+        ax.axhline(merge_y, color="grey", lw=0.8, label="merge point")
         ax.set_title(f"{split} split, {case}", fontsize=9)
         ax.set_xlabel("t [s]")
         ax.legend(fontsize=7)
     for ax in axes[:, 0]:
         ax.set_ylabel(f"y [m] (merge at {merge_y:g})")
+    fig.suptitle("ramp_merge: position along the road over time, braking barrier (paper Fig. 4)")
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
 
 
-def circular(data: dict, out_dir: Path) -> None:
+def event_marks(out: dict) -> tuple[list[int], list[str]]:
+    """The steps of deadlock onset and resolution that happened, and their legend labels."""
+    marks, labels = [], []
+    for key, text in (("deadlock_onset", "deadlock onset"), ("deadlock_resolved", "resolved")):
+        if out[key]:
+            marks.append(out[key])
+            labels.append(f"positions at {text} (step {out[key]})")
+    return marks, labels
+
+
+def circular(data: dict, out_dir: Path) -> list[Path]:
     """Figs. 5-7: both trajectories, and the average minimum distance over time."""
     import matplotlib.pyplot as plt
 
+    written = []
     for name in ("sym", "asym"):
         out = data[name]
-        marks = [m for m in (out["deadlock_onset"], out["deadlock_resolved"]) if m]
-        title = {"sym": "symmetric", "asym": "asymmetric"}[name]
+        marks, labels = event_marks(out)
+        weighting = {"sym": "symmetric", "asym": "asymmetric"}[name]
+        theta = ", ".join(f"{t:g}" for t in out["theta"])
         fig = plot_trajectories(
             out["trajectory"],
             out["goals"],
             out["theta"],
             out["safety_radius"],
             marks=marks,
-            title=f"{title}, theta = (2,1,2,1,2,1)",
+            mark_labels=labels,
+            title=f"circular_swap, theta = ({theta}), {weighting} weighting, filter on",
         )
-        fig.savefig(out_dir / f"circular_{title}.png", dpi=100, bbox_inches="tight")
+        written.append(out_dir / f"circular_{weighting}.png")
+        fig.savefig(written[-1], dpi=100, bbox_inches="tight")
         plt.close(fig)
     fig, ax = plt.subplots(figsize=(7, 4))
     t = np.arange(1, len(data["sym"]["avg_min_distance_series"]) + 1)
@@ -101,6 +134,11 @@ def circular(data: dict, out_dir: Path) -> None:
     ax.set_xlabel("step")
     ax.set_ylabel("average minimum distance D [m]")
     ax.legend(fontsize=8)
+    ax.set_title(
+        "circular_swap: average distance to the nearest neighbour (paper Fig. 7)", fontsize=9
+    )
     fig.tight_layout()
-    fig.savefig(out_dir / "avg_min_distance.png", dpi=100)
+    written.append(out_dir / "avg_min_distance.png")
+    fig.savefig(written[-1], dpi=100)
     plt.close(fig)
+    return written

@@ -1,31 +1,53 @@
-"""Entry point of the ``rsvo`` command."""
+"""rsvo: responsibility-associated multi-agent collision avoidance (R-SVO weights, R-CBF filter).
+
+Commands: demo (the filter alone on plain arrays), simulate (one scenario, its metrics, a GIF
+and a figure), reproduce (the paper's experiments: tables, figures and GIFs). Run
+"rsvo COMMAND --help" for the options of each.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
 
+COMMANDS = {
+    "demo": "filter a two-agent head-on swap on plain arrays and print the distance kept",
+    "simulate": "run one scenario with the scripted controller; print its metrics, write a GIF "
+    "and a trajectory figure",
+    "reproduce": "the paper's experiments: tables (paper.md), figures and GIFs",
+}
+
+
+class UserError(Exception):
+    """A mistake in the command line, reported as one line and exit status 2."""
+
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="rsvo", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
-    sub.add_parser("demo", help="filter a two-agent head-on swap and print the distance kept")
-    sub.add_parser("simulate", help="run a scenario; metrics, GIF, figure", add_help=False)
-    sub.add_parser("reproduce", help="the paper's experiments: tables and figures", add_help=False)
+    parser = argparse.ArgumentParser(
+        prog="rsvo", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, text in COMMANDS.items():
+        sub.add_parser(name, help=text, add_help=False)
     args, rest = parser.parse_known_args(argv)
-    if args.command == "demo":
-        from rsvo_env.cli import demo
+    try:
+        if args.command == "demo":
+            from rsvo_env.cli import demo
 
-        return demo.main()
-    if args.command == "simulate":
-        from rsvo_env.cli import simulate
+            if rest:
+                raise UserError(f"demo takes no arguments, got {' '.join(rest)}")
+            return demo.main()
+        if args.command == "simulate":
+            from rsvo_env.cli import simulate
 
-        return simulate.main(rest)
-    if args.command == "reproduce":
+            return simulate.main(rest)
         from rsvo_env.cli import reproduce
 
         return reproduce.main(rest)
-    return 2  # pragma: no cover - argparse rejects unknown commands
+    except (UserError, ValueError, TypeError) as exc:
+        # bad values reach the library's validation, which names the field and the value
+        print(f"rsvo {args.command}: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -1,9 +1,11 @@
 """``rsvo reproduce``: the paper's experiments (Sec. V) as one command, tables and figures.
 
-Writes ``paper.md`` and PNG figures (and two GIFs) to ``--out`` (default
-``benchmarks/results`` in a checkout); the full run also refreshes README's Results section.
-Every number in ``paper.md`` comes from this run; the same seed gives the same file, byte for
-byte, but for the line that reports the wall time.
+rsvo reproduce: the paper's experiments (Sec. V) as one command: position swap, ramp merge,
+circular game and "who benefits", written as paper.md with its figures and GIFs.
+
+Output goes to --out (default ./rsvo-results, where you run the command); a README's results
+block is refreshed only with --readme. Every file written is printed. Every number in paper.md
+comes from this run; the same seed gives the same file, byte for byte, but for the wall time.
 """
 
 from __future__ import annotations
@@ -15,8 +17,6 @@ from typing import Any
 
 from rsvo_env.cli import figures, report
 from rsvo_env.cli.studies import Plan, circular, position_swap, ramp_merge, who_benefits
-
-ROOT = Path(__file__).resolve().parents[2]
 
 
 def reproduce(
@@ -33,9 +33,11 @@ def reproduce(
         rm = ramp_merge.study(plan, bar.update)
         cg = circular.study(plan, bar.update, out_dir)
     wb = who_benefits.study(cg)
-    figures.position_swap(ps["runs"], out_dir / "position_swap.png")
-    figures.ramp_merge(rm["figure_runs"], out_dir / "ramp_merge.png")
-    figures.circular(cg["runs"], out_dir)
+    written = [out_dir / "position_swap.png", out_dir / "ramp_merge.png"]
+    figures.position_swap(ps["runs"], written[0])
+    figures.ramp_merge(rm["figure_runs"], written[1])
+    written += figures.circular(cg["runs"], out_dir)
+    written += [out_dir / f"circular_{w}.gif" for w in ("symmetric", "asymmetric")]
     wall = time.perf_counter() - t0
     diff = report.differences(ps, rm, cg)
     doc = [
@@ -57,6 +59,7 @@ def reproduce(
         "",
     ]
     (out_dir / "paper.md").write_text("\n".join(doc))
+    written.insert(0, out_dir / "paper.md")
     if readme is not None:
         root = readme.resolve().parent
         rel = (
@@ -65,6 +68,7 @@ def reproduce(
             else out_dir
         )
         report.write_readme(report.readme_block(ps, rm, cg, diff, rel), readme)
+        written.append(readme)
     return {
         "position_swap": ps,
         "ramp_merge": rm,
@@ -72,28 +76,35 @@ def reproduce(
         "who_benefits": wb,
         "wall_time": wall,
         "paper_md": out_dir / "paper.md",
+        "written": written,
     }
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="rsvo reproduce", description=__doc__)
-    ap.add_argument("--quick", action="store_true", help="a small run (about half a minute)")
+    ap = argparse.ArgumentParser(
+        prog="rsvo reproduce",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    ap.add_argument(
+        "--quick", action="store_true", help="a small run, about half a minute (default: full)"
+    )
     ap.add_argument(
         "--out",
         type=Path,
-        default=None,
-        help="output folder (default benchmarks/results in a checkout, else ./rsvo-results)",
+        default=Path("rsvo-results"),
+        help="output folder (default: %(default)s)",
     )
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=int, default=0, help="seed of every run (default: %(default)s)")
     ap.add_argument(
-        "--no-readme", action="store_true", help="do not refresh README's Results section"
+        "--readme",
+        type=Path,
+        default=None,
+        help="also refresh the results block of this README (default: none)",
     )
     args = ap.parse_args(argv)
-    in_checkout = (ROOT / "README.md").exists() and (ROOT / "benchmarks").is_dir()
-    out = args.out or (ROOT / "benchmarks" / "results" if in_checkout else Path("rsvo-results"))
-    readme = None
-    if not (args.quick or args.no_readme or args.out is not None) and in_checkout:
-        readme = ROOT / "README.md"
-    res = reproduce(out, quick=args.quick, seed=args.seed, readme=readme)
-    print(f"wrote {res['paper_md']} in {res['wall_time']:.1f} s")
+    res = reproduce(args.out, quick=args.quick, seed=args.seed, readme=args.readme)
+    for path in res["written"]:
+        print(f"wrote {path}")
+    print(f"done in {res['wall_time']:.1f} s")
     return 0 if res["circular"]["collisions"] == 0 else 1

@@ -1,7 +1,7 @@
-"""``rsvo simulate``: run a scenario with the scripted controller, print its metrics, and
-optionally write a GIF and a trajectory figure.
+"""rsvo simulate: run one scenario with the scripted controller behind the R-CBF filter, print
+its episode metrics, and optionally write an animated GIF and a trajectory figure.
 
-    rsvo simulate circular_swap --theta 2 1 2 1 2 1 --gif out/circular.gif --png out/circular.png
+example: rsvo simulate circular_swap --theta 2 1 2 1 2 1 --gif circular.gif --png circular.png
 """
 
 from __future__ import annotations
@@ -13,7 +13,12 @@ from typing import Any
 import numpy as np
 
 import rsvo_env
+from rsvo_env.cli.main import UserError
 from rsvo_env.rendering import plot_trajectories, save_gif
+
+
+class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
+    """Keeps the description's lines and shows every default."""
 
 
 def run(
@@ -64,18 +69,31 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="rsvo simulate",
         description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     ap.add_argument(
-        "scenario", nargs="?", default="circular_swap", choices=sorted(rsvo_env.SCENARIOS)
+        "scenario",
+        nargs="?",
+        default="circular_swap",
+        choices=sorted(rsvo_env.SCENARIOS),
+        help="which of the paper's scenarios",
     )
     ap.add_argument("--no-filter", action="store_true", help="run without the safety filter")
-    ap.add_argument("--weighting", default="asymmetric", choices=["asymmetric", "symmetric"])
-    ap.add_argument("--theta", type=float, nargs="+", help="personality scores, one per agent")
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--gif", type=Path, help="write an animated GIF here")
-    ap.add_argument("--png", type=Path, help="write a trajectory figure here")
+    ap.add_argument(
+        "--weighting",
+        default="asymmetric",
+        choices=["asymmetric", "symmetric"],
+        help="asymmetric: the paper's R-SVO weights; symmetric: 0.5 for every pair",
+    )
+    ap.add_argument("--theta", type=float, nargs="+", help="personality scores >= 0, one per agent")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the episode")
+    ap.add_argument("--gif", type=Path, help="write an animated GIF here (.gif)")
+    ap.add_argument("--png", type=Path, help="write a trajectory figure here (.png)")
     args = ap.parse_args(argv)
+    # formats are checked before any work
+    for path, suffix in ((args.gif, ".gif"), (args.png, ".png")):
+        if path is not None and path.suffix.lower() != suffix:
+            raise UserError(f"{path} must end in {suffix}")
     out = run(
         args.scenario,
         safety_filter=not args.no_filter,
@@ -100,8 +118,19 @@ def main(argv: list[str] | None = None) -> int:
     if args.png:
         import matplotlib.pyplot as plt
 
+        from rsvo_env.cli.figures import event_marks
+
+        marks, labels = event_marks(out)
+        theta = ", ".join(f"{t:g}" for t in out["theta"])
         fig = plot_trajectories(
-            out["trajectory"], out["goals"], out["theta"], out["safety_radius"], title=args.scenario
+            out["trajectory"],
+            out["goals"],
+            out["theta"],
+            out["safety_radius"],
+            marks=marks,
+            mark_labels=labels,
+            title=f"{args.scenario}, theta = ({theta}), {args.weighting} weighting, "
+            + ("no filter" if args.no_filter else "filter on"),
         )
         args.png.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(args.png, dpi=120, bbox_inches="tight")

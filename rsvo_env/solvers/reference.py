@@ -29,7 +29,13 @@ SOLVER_OPTIONS: dict[str, dict[str, Any]] = {
         "max_iter": 400,
     },
     "daqp": {},
-    "osqp": {"eps_abs": 1e-9, "eps_rel": 1e-9, "max_iter": 100000, "polish": True},
+    "osqp": {
+        "eps_abs": 1e-9,
+        "eps_rel": 1e-9,
+        "max_iter": 100000,
+        "polish": True,
+        "verbose": False,
+    },
 }
 
 

@@ -1,0 +1,109 @@
+"""What a user meets: clean CLI errors, clear refusals of impossible set-ups, warnings for
+unused options, registered step limits, a project that points nowhere outside itself."""
+
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import gymnasium
+import pytest
+
+import rsvo_env
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def rsvo(*args, cwd=None):
+    return subprocess.run(
+        [sys.executable, "-m", "rsvo_env.cli", *args], capture_output=True, text=True, cwd=cwd
+    )
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["simulate", "circular_swap", "--theta", "2", "1"], "theta has 2 entries, expected 6"),
+        (
+            ["simulate", "circular_swap", "--theta", "-1", "1", "1", "1", "1", "1"],
+            "theta[0] = -1.0",
+        ),
+        (["simulate", "--gif", "out.mp4"], "out.mp4 must end in .gif"),
+        (["simulate", "--png", "out.jpg"], "out.jpg must end in .png"),
+        (["demo", "extra"], "demo takes no arguments"),
+    ],
+)
+def test_cli_user_errors_are_one_line(tmp_path, args, message):
+    out = rsvo(*args, cwd=tmp_path)
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], out.stderr
+    assert "Traceback" not in out.stderr
+    assert not any(tmp_path.iterdir())  # nothing was written: formats are checked first
+
+
+def test_cli_help_describes_and_shows_defaults():
+    top = rsvo("--help")
+    assert top.returncode == 0 and "R-CBF" in top.stdout and "reproduce" in top.stdout
+    assert "``" not in top.stdout
+    sim = " ".join(rsvo("simulate", "--help").stdout.split())  # argparse wraps lines
+    assert "(default: circular_swap)" in sim and "(default: 0)" in sim
+    assert "(default: asymmetric)" in sim
+
+
+@pytest.mark.parametrize("name", ["position_swap", "ramp_merge"])
+def test_fixed_size_scenarios_refuse_other_counts(name):
+    with pytest.raises(
+        ValueError, match=rf"{name} is laid out for exactly 2 agents; num_agents = 4"
+    ):
+        rsvo_env.parallel_env(name, num_agents=4)
+    with pytest.raises(ValueError, match="laid out for exactly 2"):
+        gymnasium.make(f"rsvo/{'PositionSwap' if name == 'position_swap' else 'RampMerge'}-v0",
+                       num_agents=3)  # fmt: skip
+    rsvo_env.parallel_env(name, num_agents=2)
+
+
+@pytest.mark.parametrize("count", [0, 1, 2.7, "4", True])
+def test_agent_count_must_be_an_integer_of_at_least_two(count):
+    with pytest.raises(ValueError, match=r"crowd.num_agents = .* must be an integer >= 2"):
+        rsvo_env.parallel_env("crowd", num_agents=count)
+
+
+def test_unknown_reset_options_warn_once_and_name_the_known_ones():
+    env = rsvo_env.parallel_env("crowd", num_agents=4)
+    with pytest.warns(UserWarning, match=r"\['thetas'\] are not used.*\['theta', 'weighting'\]"):
+        env.reset(seed=0, options={"thetas": [1, 2, 3, 4]})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        env.reset(seed=0, options={"thetas": [1, 2, 3, 4]})  # once is enough
+        env.reset(seed=0, options={"theta": [1, 2, 3, 4], "weighting": "symmetric"})
+
+
+def test_registered_specs_carry_the_step_limit():
+    for env_id, scenario in rsvo_env.registration.IDS.items():
+        spec = gymnasium.spec(env_id)
+        assert spec.max_episode_steps == rsvo_env.SCENARIOS[scenario].defaults["max_steps"]
+    # gymnasium.make applies a TimeLimit at the registered limit; a longer episode asks for both
+    env = gymnasium.make("rsvo/PositionSwap-v0", max_steps=2000, max_episode_steps=2000)
+    assert env.spec.max_episode_steps == 2000 and env.unwrapped.base.max_steps == 2000
+
+
+def test_repr_names_scenario_and_filter():
+    import wrappers
+
+    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("circular_swap"), gamma=10.0)
+    assert repr(env.unwrapped) == (
+        "RSVOParallelEnv('circular_swap', num_agents=6, filter=[gamma=10 exact])"
+    )
+
+
+def test_the_project_points_nowhere_outside_itself():
+    """No file of the project refers to the design document or the folder beside it."""
+    pattern = r"DESIGN\.md\|" + "shar" + "ed/"  # in two pieces, so that this file does not match
+    hits = subprocess.run(
+        ["grep", "-rln", pattern, "--include=*.py", "--include=*.md", "."],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    ).stdout.split()
+    assert [h for h in hits if not h.startswith("./.venv")] == []
