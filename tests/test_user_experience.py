@@ -30,7 +30,9 @@ def rsvo(*args, cwd=None):
         ),
         (["simulate", "--gif", "out.mp4"], "out.mp4 must end in .gif"),
         (["simulate", "--png", "out.jpg"], "out.jpg must end in .png"),
-        (["demo", "extra"], "demo takes no arguments"),
+        (["demo", "extra"], "unrecognized arguments: extra"),
+        (["simulate", "crowds"], "invalid choice: 'crowds'"),
+        (["reproduce", "--seed", "x"], "invalid int value: 'x'"),
     ],
 )
 def test_cli_user_errors_are_one_line(tmp_path, args, message):
@@ -107,3 +109,24 @@ def test_the_project_points_nowhere_outside_itself():
         text=True,
     ).stdout.split()
     assert [h for h in hits if not h.startswith("./.venv")] == []
+
+
+def test_reference_solvers_are_quiet(capfd):
+    from rsvo_env.safety import FilterConfig, SafetyFilter
+
+    x = [[0.0, 0.0], [1.5, 0.0], [0.0, 1.5]]
+    SafetyFilter(FilterConfig(solver="osqp")).filter(x, [[3, 0], [-3, 0], [0, -3]], [1, 2, 3])
+    out = capfd.readouterr()
+    assert out.out == "" and out.err == ""
+
+
+def test_committed_gifs_play_at_their_frame_rate():
+    from PIL import Image
+
+    for name in ("circular_symmetric.gif", "circular_asymmetric.gif"):
+        gif = Image.open(ROOT / "benchmarks" / "results" / name)
+        durations = set()
+        for k in range(gif.n_frames):
+            gif.seek(k)
+            durations.add(gif.info["duration"])
+        assert durations == {50}, (name, durations)  # 20 frames per second

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import NoReturn
 
 COMMANDS = {
     "demo": "filter a two-agent head-on swap on plain arrays and print the distance kept",
@@ -22,8 +23,16 @@ class UserError(Exception):
     """A mistake in the command line, reported as one line and exit status 2."""
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse, with its errors as one line (no usage block) and exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        print(f"{self.prog}: error: {message}", file=sys.stderr)
+        sys.exit(2)
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="rsvo", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -34,9 +43,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "demo":
             from rsvo_env.cli import demo
 
-            if rest:
-                raise UserError(f"demo takes no arguments, got {' '.join(rest)}")
-            return demo.main()
+            return demo.main(rest)
         if args.command == "simulate":
             from rsvo_env.cli import simulate
 

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from rsvo_env.cli import figures, report
+from rsvo_env.cli.main import Parser
 from rsvo_env.cli.studies import Plan, circular, position_swap, ramp_merge, who_benefits
 
 
@@ -81,7 +82,7 @@ def reproduce(
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(
+    ap = Parser(
         prog="rsvo reproduce",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,

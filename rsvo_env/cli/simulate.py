@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 import rsvo_env
-from rsvo_env.cli.main import UserError
+from rsvo_env.cli.main import Parser, UserError
 from rsvo_env.rendering import plot_trajectories, save_gif
 
 
@@ -66,7 +66,7 @@ def run(
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(
+    ap = Parser(
         prog="rsvo simulate",
         description=__doc__,
         formatter_class=HelpFormatter,

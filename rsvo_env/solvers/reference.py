@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 import qpsolvers
 from numpy.typing import NDArray
+from scipy import sparse
 from scipy.optimize import linprog
 
 from rsvo_env.solvers import exact
@@ -76,10 +77,15 @@ def _qp(
     An interior-point solver may stop at "almost solved" on a polygon that is a single point
     (a row touching the box at a corner); such an answer is kept when it is feasible to 1e-9.
     """
+    P, G = 2.0 * np.eye(2), A if len(b) else None
+    if solver not in qpsolvers.dense_solvers:
+        # a sparse-only solver (osqp, ...) would otherwise warn on every call about converting
+        P = sparse.csc_matrix(P)
+        G = None if G is None else sparse.csc_matrix(G)
     problem = qpsolvers.Problem(
-        2.0 * np.eye(2),
+        P,
         -2.0 * np.asarray(nominal, dtype=np.float64),
-        A if len(b) else None,
+        G,
         b if len(b) else None,
         lb=lo,
         ub=hi,
