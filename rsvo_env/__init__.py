@@ -24,10 +24,11 @@ def parallel_env(scenario: str = "circular_swap", **kwargs: Any) -> RSVOParallel
 
 
 def env(scenario: str = "circular_swap", **kwargs: Any):
-    """The AEC version, through PettingZoo's ``parallel_to_aec`` converter."""
-    from pettingzoo.utils.conversions import parallel_to_aec
+    """The AEC version, through PettingZoo's ``parallel_to_aec`` converter (actions checked when
+    they are submitted)."""
+    from rsvo_env.env import aec_from_parallel
 
-    return parallel_to_aec(parallel_env(scenario, **kwargs))
+    return aec_from_parallel(parallel_env(scenario, **kwargs))
 
 
 __all__ = [

@@ -340,10 +340,11 @@ def double_integrator_rows(
     if barrier == "braking":
         a_max = float(np.min(np.minimum(-lo, hi)))
         A_brake = 2.0 * a_max
-        q = dpdv / dist
-        closing = q < 0.0
-        h = dist - safety_radius - np.maximum(0.0, -q) ** 2 / (2.0 * A_brake)
+        # coincident agents divide by zero here; their NaN rows are flagged below
         with np.errstate(divide="ignore", invalid="ignore"):
+            q = dpdv / dist
+            closing = q < 0.0
+            h = dist - safety_radius - np.maximum(0.0, -q) ** 2 / (2.0 * A_brake)
             rhs = (dv2 - q * q) - A_brake * dist + gamma * h * A_brake * dist / (-q)
         c = 1.0
         if dt is None:
@@ -354,7 +355,8 @@ def double_integrator_rows(
             # it gets no row there; a sampled system can still cross q = 0 and land at h < 0
             # within one step. The one-step condition h+ >= (1 - gamma dt) h, with h+ from the
             # exact second-order expansion of |dp| under constant a, closes that gap.
-            rhs_open = (dv2 - q * q) + 2.0 * dist * (q + gamma * (dist - safety_radius)) / dt
+            with np.errstate(invalid="ignore"):
+                rhs_open = (dv2 - q * q) + 2.0 * dist * (q + gamma * (dist - safety_radius)) / dt
             rhs = np.where(closing, rhs, rhs_open)
             exists = np.ones(len(I), dtype=bool)
     else:
@@ -381,4 +383,13 @@ def double_integrator_rows(
             capped = exists & ~unrecoverable & (clipped != s_i)
             s_i = np.where(unrecoverable, 0.5 * finite_rhs, clipped)
     s_j = finite_rhs - s_i
+    # Coincident agents (|dp| = 0) have no direction to keep apart along and give NaN rows: a
+    # row no action satisfies (0 . a <= -1) flags both QPs infeasible instead.
+    finite = np.isfinite(s_i) & np.isfinite(s_j) & np.isfinite(A_i).all(axis=1)
+    bad = (exists & ~finite) | (dist == 0.0)
+    if bad.any():
+        A_i = np.where(bad[:, None], 0.0, A_i)
+        s_i, s_j = np.where(bad, -1.0, s_i), np.where(bad, -1.0, s_j)
+        h = np.where(bad, -safety_radius, h)
+        exists = exists | bad
     return _finish(n, I, J, A_i, s_i, s_j, h, lo, hi, exists, unrecoverable, capped, cull)

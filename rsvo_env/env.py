@@ -14,6 +14,7 @@ import numpy as np
 from gymnasium.utils import seeding
 from numpy.typing import NDArray
 from pettingzoo import ParallelEnv
+from pettingzoo.utils import BaseWrapper
 
 from rsvo_env.core import make_simulator
 from rsvo_env.metrics import FLAT_FIELDS, EpisodeMetrics
@@ -22,7 +23,7 @@ from rsvo_env.responsibility import Weighting, weight_matrix
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario
 from rsvo_env.state import World
-from rsvo_env.validation import check_action_dict
+from rsvo_env.validation import check_action, check_action_dict
 
 
 class EpisodeView:
@@ -260,3 +261,22 @@ class RSVOParallelEnv(ParallelEnv):
         if self.sim.rngs[0] is None:
             self.sim.rngs[0], _ = seeding.np_random()
         return self.sim.rngs[0]
+
+
+class CheckedActionsAEC(BaseWrapper):
+    """The AEC form of an env (``parallel_to_aec``) that refuses a bad action when it is
+    submitted: PettingZoo's converter only stores it and steps the parallel env once every agent
+    has acted, so a NaN would surface at another agent's turn, and every turn after it."""
+
+    def step(self, action: Any) -> None:
+        agent = self.agent_selection
+        if action is not None and not (self.terminations[agent] or self.truncations[agent]):
+            check_action(action, agent)
+        super().step(action)
+
+
+def aec_from_parallel(parallel: Any) -> CheckedActionsAEC:
+    """``parallel_to_aec`` with the actions checked on submission."""
+    from pettingzoo.utils.conversions import parallel_to_aec
+
+    return CheckedActionsAEC(parallel_to_aec(parallel))

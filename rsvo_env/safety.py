@@ -101,6 +101,13 @@ class FilterConfig:
                 f"FilterConfig needs finite u_min < u_max per component, got "
                 f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
             )
+        if self.dynamics == "single_integrator" and not ((lo <= 0).all() and (hi >= 0).all()):
+            # u = 0 satisfies every row while h >= 0 only if the box holds 0: without it a pair in
+            # the safe set can have no safe action
+            raise ValueError(
+                f"FilterConfig: the single-integrator box must contain 0 (u_min <= 0 <= u_max), "
+                f"got u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
+            )
         if self.dynamics == "double_integrator" and self.barrier == "braking":
             if not ((lo < 0).all() and (hi > 0).all()):
                 raise ValueError(

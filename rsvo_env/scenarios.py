@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from rsvo_env import nominal
 from rsvo_env.planar import norm
-from rsvo_env.validation import check_positive, check_theta
+from rsvo_env.validation import check_positive, check_real, check_theta, real_array
 
 COMMON_DEFAULTS: dict[str, Any] = {
     "dt": 0.01,
@@ -71,6 +71,15 @@ class Scenario:
             raise ValueError(f"{self.name}.num_agents = {count!r} must be an integer >= 2")
         if count < 2:
             raise ValueError(f"{self.name}.num_agents = {count!r} must be an integer >= 2")
+        for key, default in {**COMMON_DEFAULTS, **self.defaults}.items():
+            # every real-valued parameter must be real and finite (a NaN would only surface
+            # later, as an error naming no field)
+            if isinstance(default, float):
+                params[key] = check_real(params[key], f"{self.name}.{key}")
+            elif isinstance(default, tuple):
+                arr = real_array(params[key], f"{self.name}.{key}")
+                if not np.isfinite(arr).all():
+                    raise ValueError(f"{self.name}.{key} = {params[key]!r} must be finite")
         for key in ("dt", "goal_tolerance", "safety_radius", "gamma", "k", "theta_max"):
             if key in params:
                 params[key] = check_positive(params[key], f"{self.name}.{key}")

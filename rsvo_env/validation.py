@@ -110,12 +110,16 @@ def check_action_dict(
             )
         missing = [a for a in agents if a not in actions]
         raise ValueError(f"no action given for agent {missing[0]!r}")
+    values = [actions[a] for a in agents]
     try:
-        out = np.array([actions[a] for a in agents])
+        out = np.array(values)
     except (TypeError, ValueError):
         out = None
+    # numpy would turn a list of bools, or a bool array stacked with float ones, into numbers
+    plain = all(type(v) is np.ndarray and v.dtype.kind in "uif" for v in values)
     if (
-        out is None
+        not plain
+        or out is None
         or out.dtype.kind not in "uif"
         or out.shape != (len(agents),) + shape
         or not np.isfinite(out).all()

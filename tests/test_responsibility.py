@@ -34,10 +34,11 @@ def test_equal_theta_is_prosocial(t):
 @settings(max_examples=300, deadline=None)
 @given(scores, scores, st.floats(min_value=1e-3, max_value=1e6))
 def test_more_egoistic_means_larger_omega(ti, delta, tj):
-    # a smaller theta_i (more egoistic) never lowers omega_i, and strictly raises it
+    # a smaller theta_i (more egoistic) never lowers omega_i (up to the round-off of cos, a few
+    # 1e-17 when delta is below theta_i's own precision), and strictly raises it
     w_ego = responsibility_weight(ti, tj)
     w_alt = responsibility_weight(ti + delta, tj)
-    assert w_ego >= w_alt
+    assert w_ego >= w_alt - 1e-15
     if delta > 1e-6 * (ti + tj) and 1e-6 < w_ego < 1.0:
         assert w_ego > w_alt
 

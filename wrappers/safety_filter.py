@@ -70,7 +70,7 @@ def filtered_parallel_env(
 
 
 def filtered_aec_env(**kwargs: Any):
-    """The AEC version of :func:`filtered_parallel_env`."""
-    from pettingzoo.utils.conversions import parallel_to_aec
+    """The AEC version of :func:`filtered_parallel_env` (actions checked when submitted)."""
+    from rsvo_env.env import aec_from_parallel
 
-    return parallel_to_aec(filtered_parallel_env(**kwargs))
+    return aec_from_parallel(filtered_parallel_env(**kwargs))

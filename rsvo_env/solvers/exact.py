@@ -7,11 +7,13 @@ one by one, and when a row is violated re-solve on that row's line, a 1-D proble
 box and the rows before it. Seidel's argument makes this exact: if the optimum of the first k
 rows violates row k, the optimum of the first k+1 rows lies on row k's line.
 
-An empty polygon (one that stays empty when every row is moved out by ``FEASIBILITY_TOL``) is
-reported (``feasible=False``) and replaced by the action that minimises the
-largest normalised violation ``max_k (a_k u - b_k)/|a_k|`` over the box, and among those the one
-closest to the nominal (the role of ORCA's ``linearProgram3``). The min-max value is found by
-bisection on the shift ``t`` of all rows, each probe an exact feasibility test, to 1e-13 relative.
+Every round-off allowance is relative to the problem's scale (the box's extent and the rows'
+offsets). An empty polygon (one that stays empty when every row is moved out by
+``FEASIBILITY_TOL`` times the box's extent) is reported (``feasible=False``) and replaced by
+the action that minimises the largest normalised violation ``max_k (a_k u - b_k)/|a_k|`` over
+the box, and among those the one closest to the nominal (the role of ORCA's
+``linearProgram3``). The min-max value is found by bisection on the shift ``t`` of all rows,
+each probe an exact feasibility test, to 1e-13 relative.
 """
 
 from __future__ import annotations
@@ -20,19 +22,34 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
-# Slack on "row satisfied", scaled by the row's size: below it a point is on the row's line.
+# Round-off allowances, relative to the problem's scale: a row whose offset is b (unit normal) is
+# satisfied to _EPS * (scale + |b|), with ``scale`` the box's extent, so a user in millimetres
+# gets the same answers as one in metres.
 _EPS = 1e-12
 _ACTIVE_TOL = 1e-9
-# A polygon that a shift of every row by this much makes non-empty is feasible: round-off in h
-# (agents resting exactly at the safety distance) must not be reported as infeasibility.
+# A polygon that a shift of every row by FEASIBILITY_TOL * scale makes non-empty is feasible:
+# round-off in h (agents resting exactly at the safety distance) is not infeasibility.
 FEASIBILITY_TOL = 1e-9
 
 
 @njit(cache=True, inline="always")
-def _project(nx, ny, rows, nrows, shift, lo0, lo1, hi0, hi1):
+def _narrow(lo, hi, bound, upper):
+    """The interval [lo, hi] cut by ``t <= bound`` (upper) or ``t >= bound``."""
+    if upper:
+        return lo, min(hi, bound)
+    return max(lo, bound), hi
+
+
+@njit(cache=True, inline="always")
+def _project(nx, ny, rows, nrows, shift, lo0, lo1, hi0, hi1, scale):
     """Exact projection of (nx, ny) onto box ∩ {rows[k,:2]·u <= rows[k,2] + shift}.
 
-    ``rows`` are normalised (unit normal). Returns (ux, uy, feasible).
+    ``rows`` are normalised (unit normal). Returns (ux, uy, feasible). On each row's line the
+    algorithm keeps two intervals: the exact one, where the point goes, and one widened by the
+    round-off allowances (see ``_EPS``), which decides feasibility. When only rounding empties
+    the exact interval (a polygon that is a single point, e.g. a row through a box corner), the
+    point is the middle of its bounds: no allowance lets it slide along a nearly parallel edge.
+    Nearly parallel lines need no threshold: their crossing, however far, is computed.
     """
     ux = min(max(nx, lo0), hi0)
     uy = min(max(ny, lo1), hi1)
@@ -40,7 +57,7 @@ def _project(nx, ny, rows, nrows, shift, lo0, lo1, hi0, hi1):
         ax = rows[k, 0]
         ay = rows[k, 1]
         bk = rows[k, 2] + shift
-        tol = _EPS * (1.0 + abs(bk))
+        tol = _EPS * (scale + abs(bk))
         if ax == 0.0 and ay == 0.0:
             if bk < -tol:
                 return ux, uy, False
@@ -53,45 +70,38 @@ def _project(nx, ny, rows, nrows, shift, lo0, lo1, hi0, hi1):
         dx = -ay
         dy = ax
         t = dx * (nx - p0x) + dy * (ny - p0y)
-        tlo = -np.inf
-        thi = np.inf
-        # Box, x then y.
-        if abs(dx) > 1e-15:
-            t1 = (lo0 - p0x) / dx
-            t2 = (hi0 - p0x) / dx
-            tlo = max(tlo, min(t1, t2))
-            thi = min(thi, max(t1, t2))
-        elif p0x < lo0 - tol or p0x > hi0 + tol:
-            return ux, uy, False
-        if abs(dy) > 1e-15:
-            t1 = (lo1 - p0y) / dy
-            t2 = (hi1 - p0y) / dy
-            tlo = max(tlo, min(t1, t2))
-            thi = min(thi, max(t1, t2))
-        elif p0y < lo1 - tol or p0y > hi1 + tol:
-            return ux, uy, False
+        elo, ehi = -np.inf, np.inf  # exact
+        wlo, whi = -np.inf, np.inf  # widened
+        for p0c, dc, lc, hc in ((p0x, dx, lo0, hi0), (p0y, dy, lo1, hi1)):
+            if dc != 0.0:
+                t1, t2 = (lc - p0c) / dc, (hc - p0c) / dc
+                elo, ehi = max(elo, min(t1, t2)), min(ehi, max(t1, t2))
+                t1, t2 = (lc - tol - p0c) / dc, (hc + tol - p0c) / dc
+                wlo, whi = max(wlo, min(t1, t2)), min(whi, max(t1, t2))
+            elif p0c < lc - tol or p0c > hc + tol:
+                return ux, uy, False
         for m in range(k):
             amx = rows[m, 0]
             amy = rows[m, 1]
             if amx == 0.0 and amy == 0.0:
                 continue
+            bm = rows[m, 2] + shift
             denom = amx * dx + amy * dy
-            numer = rows[m, 2] + shift - (amx * p0x + amy * p0y)
-            if abs(denom) <= 1e-15:
-                # Parallel to row k: either all of line k satisfies row m, or none of it does.
-                if numer < -_EPS * (1.0 + abs(rows[m, 2] + shift)):
+            numer = bm - (amx * p0x + amy * p0y)
+            allowance = _EPS * (scale + abs(bm))
+            if denom == 0.0:
+                # Parallel to row k: all of line k satisfies row m, or none of it does.
+                if numer + allowance < 0.0:
                     return ux, uy, False
                 continue
-            if denom > 0.0:
-                thi = min(thi, numer / denom)
-            else:
-                tlo = max(tlo, numer / denom)
-        if tlo > thi:
-            if tlo - thi > _EPS * (1.0 + abs(tlo) + abs(thi)):
-                return ux, uy, False
-            t = 0.5 * (tlo + thi)
+            elo, ehi = _narrow(elo, ehi, numer / denom, denom > 0.0)
+            wlo, whi = _narrow(wlo, whi, (numer + allowance) / denom, denom > 0.0)
+        if wlo > whi:
+            return ux, uy, False
+        if elo <= ehi:
+            t = min(max(t, elo), ehi)
         else:
-            t = min(max(t, tlo), thi)
+            t = min(max(0.5 * (elo + ehi), wlo), whi)
         ux = p0x + t * dx
         uy = p0y + t * dy
     return ux, uy, True
@@ -135,30 +145,38 @@ def _solve_one(nom, A, b, mask, lo, hi, rows, out):
 def solve_rows(nx, ny, rows, nrows, lo0, lo1, hi0, hi1, out):
     """The QP of normalised ``rows[:nrows]``; writes the action to ``out``. Returns
     (feasible, active, max_violation)."""
-    ux, uy, ok = _project(nx, ny, rows, nrows, 0.0, lo0, lo1, hi0, hi1)
+    scale = max(max(abs(lo0), abs(hi0)), max(abs(lo1), abs(hi1)))
+    ux, uy, ok = _project(nx, ny, rows, nrows, 0.0, lo0, lo1, hi0, hi1, scale)
     violation = 0.0
     if not ok:
         # Least violation: the smallest shift t of every row that makes the polygon non-empty.
-        cx = min(max(nx, lo0), hi0)
-        cy = min(max(ny, lo1), hi1)
-        t_hi = max(_max_violation(cx, cy, rows, nrows), 0.0)
-        # Even the box corners cannot do better than the best corner; start there when smaller.
-        for cx2 in (lo0, hi0):
-            for cy2 in (lo1, hi1):
-                t_hi = min(t_hi, max(_max_violation(cx2, cy2, rows, nrows), 0.0))
+        # The clipped nominal and the box corners bound it; the best of them is kept in case
+        # the polygon at that shift is a single point (a row through a corner).
+        bx = min(max(nx, lo0), hi0)
+        by = min(max(ny, lo1), hi1)
+        best = _max_violation(bx, by, rows, nrows)
+        for cx in (lo0, hi0):
+            for cy in (lo1, hi1):
+                v = _max_violation(cx, cy, rows, nrows)
+                if v < best:
+                    bx, by, best = cx, cy, v
+        t_hi = max(best, 0.0)
         t_lo = 0.0
         for _ in range(200):
-            if t_hi - t_lo <= 1e-13 * (1.0 + t_hi):
+            if t_hi - t_lo <= 1e-13 * (scale + t_hi):
                 break
             mid = 0.5 * (t_lo + t_hi)
-            _, _, feas = _project(nx, ny, rows, nrows, mid, lo0, lo1, hi0, hi1)
+            _, _, feas = _project(nx, ny, rows, nrows, mid, lo0, lo1, hi0, hi1, scale)
             if feas:
                 t_hi = mid
             else:
                 t_lo = mid
-        ux, uy, feas = _project(nx, ny, rows, nrows, t_hi, lo0, lo1, hi0, hi1)
-        violation = max(_max_violation(ux, uy, rows, nrows), 0.0)
-        if violation <= FEASIBILITY_TOL:
+        ux, uy, feas = _project(nx, ny, rows, nrows, t_hi, lo0, lo1, hi0, hi1, scale)
+        violation = _max_violation(ux, uy, rows, nrows) if feas else np.inf
+        if violation > best:
+            ux, uy, violation = bx, by, best
+        violation = max(violation, 0.0)
+        if violation <= FEASIBILITY_TOL * scale:
             ok = True
             violation = 0.0
     # The input bounds are physical limits: never exceed them, not even by a rounding.
@@ -167,7 +185,7 @@ def solve_rows(nx, ny, rows, nrows, lo0, lo1, hi0, hi1, out):
     active = 0
     for k in range(nrows):
         if abs(rows[k, 0] * ux + rows[k, 1] * uy - rows[k, 2]) <= _ACTIVE_TOL * (
-            1.0 + abs(rows[k, 2])
+            scale + abs(rows[k, 2])
         ):
             active += 1
     out[0] = ux

@@ -75,8 +75,16 @@ def _qp(
     """One qpsolvers call; the solution, or None when the solver found none it vouches for.
 
     An interior-point solver may stop at "almost solved" on a polygon that is a single point
-    (a row touching the box at a corner); such an answer is kept when it is feasible to 1e-9.
+    (a row touching the box at a corner); such an answer is kept when it is feasible to 1e-9 of
+    the box's extent.
     """
+    # Unit normals: the same half-planes, better conditioned for the solver, and a residual
+    # measured in distance (the units of the box), whatever the rows' scale.
+    norms = np.linalg.norm(A, axis=1) if len(b) else np.zeros(0)
+    if np.any((norms == 0) & (b < 0)):
+        return None  # a zero row with a negative right side: nothing satisfies it
+    keep = norms > 0
+    A, b = A[keep] / norms[keep, None], b[keep] / norms[keep]
     P, G = 2.0 * np.eye(2), A if len(b) else None
     if solver not in qpsolvers.dense_solvers:
         # a sparse-only solver (osqp, ...) would otherwise warn on every call about converting
@@ -94,8 +102,9 @@ def _qp(
     x = sol.x
     if x is None or not np.all(np.isfinite(x)):
         return None
+    scale = float(max(np.max(np.abs(lo)), np.max(np.abs(hi))))
     residual = max(
-        float(np.max(A @ x - b - 1e-9 * (1.0 + np.abs(b)), initial=0.0)),
+        float(np.max(A @ x - b - 1e-9 * (scale + np.abs(b)), initial=0.0)),
         float(np.max(lo - x)),
         float(np.max(x - hi)),
     )
@@ -127,14 +136,27 @@ def solve_one(
     x = _qp(nominal, A, b, lo, hi, solver, opts)
     if x is not None:
         return x, True, 0.0
-    _, t = least_violation(A, b, lo, hi)
-    feasible = t <= exact.FEASIBILITY_TOL
+    x_lp, t = least_violation(A, b, lo, hi)
+    scale = float(max(np.max(np.abs(lo)), np.max(np.abs(hi))))
+    feasible = t <= exact.FEASIBILITY_TOL * scale
     norms = np.linalg.norm(A, axis=1)
-    # A sliver of slack keeps the shifted polygon non-empty for the interior-point solver.
-    slack = max(t, 0.0) + 1e-9 * (1.0 + abs(t))
-    x = _qp(nominal, A, b + slack * norms, lo, hi, solver, opts)
-    if x is None:  # pragma: no cover - the LP's point is always feasible for the shifted rows
-        x, _ = least_violation(A, b, lo, hi)
+    # A sliver of slack keeps the shifted polygon non-empty for the interior-point solver; it
+    # is kept tiny (relative to the box), since along a row nearly parallel to a box edge it
+    # widens a single-point polygon into a strip much longer than itself.
+    x = None
+    for rel in (1e-12, 1e-10, 1e-9):
+        slack = max(t, 0.0) + rel * (scale + abs(t))
+        x = _qp(nominal, A, b + slack * norms, lo, hi, solver, opts)
+        if x is None and solver != "clarabel":
+            # the projection from another solver, never the LP's vertex passed off as one
+            x = _qp(nominal, A, b + slack * norms, lo, hi, "clarabel", SOLVER_OPTIONS["clarabel"])
+        if x is not None:
+            break
+    if x is None:
+        raise RuntimeError(
+            f"reference solver {solver!r} (and clarabel) found no projection for nominal "
+            f"{np.asarray(nominal).tolist()} with {len(b)} rows; the least violation is {t:.3g}"
+        )
     return x, bool(feasible), 0.0 if feasible else t
 
 
