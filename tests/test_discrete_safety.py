@@ -93,3 +93,17 @@ def test_gamma_dt_above_one_collides():
     assert min_dist < sc["R"] - 1e-3
     with pytest.raises(ValueError, match="gamma \\* dt"):
         FilterConfig(gamma=60.0, dt=0.05)
+
+
+@pytest.mark.parametrize("log_scale", [-3.0, -1.5, 0.0, 1.5, 3.0])
+def test_the_guarantee_holds_in_any_units(log_scale):
+    """The same crossings in kilometres ... millimetres (lengths and speeds times 10^k): min
+    distance >= R (1 - 1e-9) throughout, and no infeasible step."""
+    s = 10.0**log_scale
+    for seed in range(8):
+        sc = crossing_scenario(np.random.default_rng(1000 + seed))
+        scaled = {**sc, "x0": sc["x0"] * s, "goals": sc["goals"] * s, "R": sc["R"] * s}
+        scaled["u_max"] = sc["u_max"] * s
+        min_dist, n_infeasible = rollout(scaled, 300, scaled["dt"])
+        assert min_dist >= scaled["R"] * (1 - 1e-9), (seed, log_scale, min_dist / s, sc["R"])
+        assert n_infeasible == 0, (seed, log_scale)
