@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from pettingzoo import ParallelEnv
 from pettingzoo.utils import BaseWrapper
 
-from rsvo_env.core import make_simulator
+from rsvo_env.factory import make_simulator
 from rsvo_env.metrics import FLAT_FIELDS, EpisodeMetrics
 from rsvo_env.rendering import Renderer
 from rsvo_env.responsibility import Weighting, weight_matrix

@@ -242,7 +242,8 @@ def plot_trajectories(
     if colorbar:
         cmap = LinearSegmentedColormap.from_list("theta", [EGOIST / 255.0, ALTRUIST / 255.0])
         lo, hi = float(theta.min()), float(theta.max())
-        norm = Normalize(lo, hi if hi > lo else lo + 1.0)
+        # equal scores sit in the middle of the bar, as they are drawn (theta_scale 0.5)
+        norm = Normalize(lo, hi) if hi > lo else Normalize(lo - 1.0, lo + 1.0)
         bar = ax.figure.colorbar(plt.cm.ScalarMappable(norm, cmap), ax=ax, shrink=0.8)
         bar.set_label("theta: red egoist (small), blue altruist (large)", fontsize=7)
     if title:

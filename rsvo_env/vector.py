@@ -13,7 +13,7 @@ import gymnasium
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.core import FILTER_KEYWORDS, filter_config, make_simulator
+from rsvo_env.factory import FILTER_KEYWORDS, filter_config, make_simulator
 from rsvo_env.responsibility import Weighting
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario

@@ -16,7 +16,7 @@ from typing import Any
 from pettingzoo.utils import BaseParallelWrapper
 
 import rsvo_env
-from rsvo_env.core import filter_config
+from rsvo_env.factory import filter_config
 from rsvo_env.safety import SafetyFilter
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -91,25 +92,31 @@ def event_marks(out: dict) -> tuple[list[int], list[str]]:
     return marks, labels
 
 
+def episode(out: dict, scenario: str, weighting: str, filtered: bool = True) -> Any:
+    """One episode's trajectories, its events marked, titled with scenario, theta, weighting
+    and filter (``rsvo simulate --png`` and the circular figures)."""
+    marks, labels = event_marks(out)
+    theta = ", ".join(f"{t:g}" for t in out["theta"])
+    return plot_trajectories(
+        out["trajectory"],
+        out["goals"],
+        out["theta"],
+        out["safety_radius"],
+        marks=marks,
+        mark_labels=labels,
+        title=f"{scenario}, theta = ({theta}), {weighting} weighting, "
+        + ("filter on" if filtered else "no filter"),
+    )
+
+
 def circular(data: dict, out_dir: Path) -> list[Path]:
     """Figs. 5-7: both trajectories, and the average minimum distance over time."""
     import matplotlib.pyplot as plt
 
     written = []
     for name in ("sym", "asym"):
-        out = data[name]
-        marks, labels = event_marks(out)
         weighting = {"sym": "symmetric", "asym": "asymmetric"}[name]
-        theta = ", ".join(f"{t:g}" for t in out["theta"])
-        fig = plot_trajectories(
-            out["trajectory"],
-            out["goals"],
-            out["theta"],
-            out["safety_radius"],
-            marks=marks,
-            mark_labels=labels,
-            title=f"circular_swap, theta = ({theta}), {weighting} weighting, filter on",
-        )
+        fig = episode(data[name], "circular_swap", weighting)
         written.append(out_dir / f"circular_{weighting}.png")
         fig.savefig(written[-1], dpi=100, bbox_inches="tight")
         plt.close(fig)

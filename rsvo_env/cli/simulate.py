@@ -14,7 +14,7 @@ import numpy as np
 
 import rsvo_env
 from rsvo_env.cli.main import Parser, UserError
-from rsvo_env.rendering import plot_trajectories, save_gif
+from rsvo_env.rendering import save_gif
 
 
 class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
@@ -118,20 +118,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.png:
         import matplotlib.pyplot as plt
 
-        from rsvo_env.cli.figures import event_marks
+        from rsvo_env.cli.figures import episode
 
-        marks, labels = event_marks(out)
-        theta = ", ".join(f"{t:g}" for t in out["theta"])
-        fig = plot_trajectories(
-            out["trajectory"],
-            out["goals"],
-            out["theta"],
-            out["safety_radius"],
-            marks=marks,
-            mark_labels=labels,
-            title=f"{args.scenario}, theta = ({theta}), {args.weighting} weighting, "
-            + ("no filter" if args.no_filter else "filter on"),
-        )
+        fig = episode(out, args.scenario, args.weighting, filtered=not args.no_filter)
         args.png.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(args.png, dpi=120, bbox_inches="tight")
         plt.close(fig)

@@ -1,0 +1,67 @@
+"""Building the core and its filter from a scenario and keyword arguments: the one place both
+adapters (``RSVOParallelEnv``, ``BatchedEnv``) and the filter wrapper take their keywords."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rsvo_env.core import Simulator
+from rsvo_env.safety import FilterConfig
+from rsvo_env.scenarios import Scenario, make_scenario
+
+SIM_KEYWORDS = (
+    "num_obs_neighbors",
+    "frame",
+    "weighting",
+    "reward_progress",
+    "reward_time",
+    "reward_goal",
+)
+FILTER_KEYWORDS = ("gamma", "solver", "barrier", "split", "neighbor_radius")
+
+
+def make_simulator(
+    scenario: str | Scenario,
+    num_envs: int = 1,
+    max_cycles: int | None = None,
+    record_series: bool = False,
+    **kwargs: Any,
+) -> Simulator:
+    """The core for a scenario (name or instance). ``kwargs`` holds the simulator's keywords
+    (:data:`SIM_KEYWORDS`) and the scenario's parameters; ``max_cycles`` is PettingZoo's name for
+    ``max_steps``. Both adapters are built through here."""
+    if max_cycles is not None:
+        if "max_steps" in kwargs:
+            raise TypeError("give max_steps or its PettingZoo name max_cycles, not both")
+        kwargs["max_steps"] = max_cycles
+    sim_kwargs = {k: kwargs.pop(k) for k in SIM_KEYWORDS if k in kwargs}
+    return Simulator(
+        make_scenario(scenario, **kwargs),
+        num_envs=num_envs,
+        record_series=record_series,
+        **sim_kwargs,
+    )
+
+
+def filter_config(
+    scenario: Scenario,
+    gamma: float | None = None,
+    solver: str = "exact",
+    barrier: str | None = None,
+    split: str | None = None,
+    neighbor_radius: float | None = None,
+) -> FilterConfig:
+    """The filter's parameters for a scenario: its gamma, radius, limits, dt and dynamics,
+    each overridable (validated now, so a bad value fails before the first step)."""
+    p = scenario.params
+    return FilterConfig(
+        gamma=p["gamma"] if gamma is None else gamma,
+        safety_radius=p["safety_radius"],
+        u_max=scenario.u_max,
+        dt=p["dt"],
+        dynamics=scenario.dynamics,
+        solver=solver,
+        barrier=barrier or p.get("barrier", "braking"),
+        split=split or p.get("split", "capability"),
+        neighbor_radius=neighbor_radius,
+    )

@@ -1,0 +1,192 @@
+"""The scenario hooks: the base class every scenario extends, today's behaviour as defaults.
+
+A scenario owns its parameters (every one overridable by keyword; an unknown keyword raises
+``TypeError`` naming it) and the hooks the simulation core calls for what differs between
+scenarios: initial states (drawn from one env's seeded generator), the scripted nominal
+controller, the goal test (success is every agent at its goal), the reward terms, the arena and
+the lanes a picture draws. Every hook but ``initial_state`` is batch-first: it takes the core's
+state, whose arrays are (E, N, ...), and answers for all envs at once.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from rsvo_env import nominal
+from rsvo_env.planar import norm
+from rsvo_env.validation import check_positive, check_real, check_theta, real_array
+
+COMMON_DEFAULTS: dict[str, Any] = {
+    "dt": 0.01,
+    "goal_tolerance": 0.05,
+    "deadlock_resolution": "right_hand",
+    "theta": None,
+    "theta_max": 1000.0,
+}
+DEADLOCK_RESOLUTIONS = ("right_hand", "none")
+
+
+@njit(cache=True)
+def _reward_terms(before, after, goals, first, progress_w, time_w, goal_w, out):
+    """Per agent: ``progress_w (|before - goal| - |after - goal|) - time_w + goal_w first``."""
+    for i in range(before.shape[0]):
+        bx, by = before[i, 0] - goals[i, 0], before[i, 1] - goals[i, 1]
+        ax, ay = after[i, 0] - goals[i, 0], after[i, 1] - goals[i, 1]
+        progress = np.sqrt(bx * bx + by * by) - np.sqrt(ax * ax + ay * ay)
+        out[i] = progress_w * progress - time_w + goal_w * (1.0 if first[i] else 0.0)
+
+
+class Scenario:
+    """Base class: parameters, initial state, nominal controller, arena."""
+
+    name: ClassVar[str] = ""
+    dynamics: ClassVar[str] = "single_integrator"
+    defaults: ClassVar[dict[str, Any]] = {}
+    # a scenario laid out for a fixed number of agents (None: any number >= 2)
+    fixed_agents: ClassVar[int | None] = None
+
+    def __init__(self, **kwargs: Any) -> None:
+        params = {**COMMON_DEFAULTS, **self.defaults}
+        unknown = sorted(set(kwargs) - set(params))
+        if unknown:
+            raise TypeError(
+                f"{self.name}() got unknown keyword argument(s) {unknown}; known: {sorted(params)}"
+            )
+        if self.fixed_agents is not None and kwargs.get("num_agents", self.fixed_agents) != (
+            self.fixed_agents
+        ):
+            raise ValueError(
+                f"{self.name} is laid out for exactly {self.fixed_agents} agents; "
+                f"num_agents = {kwargs['num_agents']!r} is not possible (use crowd or "
+                "circular_swap for other counts)"
+            )
+        params.update(kwargs)
+        self.params = params
+        count = params["num_agents"]
+        if isinstance(count, (bool, np.bool_)) or not isinstance(count, (int, np.integer)):
+            raise ValueError(f"{self.name}.num_agents = {count!r} must be an integer >= 2")
+        if count < 2:
+            raise ValueError(f"{self.name}.num_agents = {count!r} must be an integer >= 2")
+        for key, default in {**COMMON_DEFAULTS, **self.defaults}.items():
+            # every real-valued parameter must be real and finite (a NaN would only surface
+            # later, as an error naming no field)
+            if isinstance(default, float):
+                params[key] = check_real(params[key], f"{self.name}.{key}")
+            elif isinstance(default, tuple):
+                arr = real_array(params[key], f"{self.name}.{key}")
+                if not np.isfinite(arr).all():
+                    raise ValueError(f"{self.name}.{key} = {params[key]!r} must be finite")
+        for key in ("dt", "goal_tolerance", "safety_radius", "gamma", "k", "theta_max"):
+            if key in params:
+                params[key] = check_positive(params[key], f"{self.name}.{key}")
+        params[self.limit_name] = check_positive(
+            params[self.limit_name], f"{self.name}.{self.limit_name}"
+        )
+        if params["deadlock_resolution"] not in DEADLOCK_RESOLUTIONS:
+            raise ValueError(
+                f"{self.name}.deadlock_resolution = {params['deadlock_resolution']!r}; "
+                f"use one of {DEADLOCK_RESOLUTIONS}"
+            )
+        steps = params["max_steps"]
+        if not isinstance(steps, (int, np.integer)) or steps < 1:
+            raise ValueError(f"{self.name}.max_steps = {steps!r} must be an integer >= 1")
+        if params["theta"] is not None:
+            self.check_theta(params["theta"])
+
+    # -- parameters the env reads -------------------------------------------------------------
+    @property
+    def limit_name(self) -> str:
+        return "a_max" if self.dynamics == "double_integrator" else "u_max"
+
+    @property
+    def num_agents(self) -> int:
+        return int(self.params["num_agents"])
+
+    @property
+    def u_max(self) -> float:
+        """The input bound: speed (single integrator) or acceleration (double integrator)."""
+        return float(self.params[self.limit_name])
+
+    def check_theta(self, theta: Any) -> NDArray[np.float64]:
+        th = check_theta(theta)
+        if th.shape != (self.num_agents,):
+            raise ValueError(f"theta has {th.shape[0]} entries, expected {self.num_agents}")
+        too_big = th > self.params["theta_max"]
+        if too_big.any():
+            i = int(np.argmax(too_big))
+            raise ValueError(
+                f"theta[{i}] = {float(th[i])!r} exceeds theta_max = {self.params['theta_max']} "
+                f"(agent {i}); raise theta_max to allow it"
+            )
+        return th
+
+    def default_theta(self, rng: np.random.Generator) -> NDArray[np.float64]:
+        if self.params["theta"] is not None:
+            return self.check_theta(self.params["theta"])
+        return np.ones(self.num_agents)
+
+    # -- what subclasses provide --------------------------------------------------------------
+    def initial_state(
+        self, rng: np.random.Generator
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """(positions, velocities, goals), each (N, 2)."""
+        raise NotImplementedError
+
+    def arena(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """A box (lo, hi) that holds every start and goal, for drawing and observation bounds."""
+        raise NotImplementedError
+
+    def lanes(self) -> list[NDArray[np.float64]]:
+        """Polylines (K, 2) a picture of the scenario draws under the agents (none here)."""
+        return []
+
+    def nominal(self, state: Any) -> NDArray[np.float64]:
+        """Scripted nominal controls (E, N, 2) in physical units: move-to-goal (paper, Sec. V-A)
+        plus the right-hand rule."""
+        u = nominal.move_to_goal(state.positions, state.goals, self.params["k"], self.u_max)
+        if self.params["deadlock_resolution"] == "right_hand":
+            u = nominal.right_hand_rule(u, state.rh_active, self.params["rh_angle_deg"])
+        return u
+
+    def right_hand_active(self, state: Any) -> NDArray[np.bool_]:
+        """(E, N): agents whose nominal the right-hand rule turns (always False without it), from
+        the state's ``nearest`` and ``at_goal``."""
+        if self.params["deadlock_resolution"] != "right_hand":
+            return np.zeros(state.nearest.shape, dtype=bool)
+        return nominal.right_hand_active(state.nearest, state.at_goal, self.rh_trigger)
+
+    def reward(
+        self,
+        before: NDArray[np.float64],
+        after: NDArray[np.float64],
+        goals: NDArray[np.float64],
+        first_arrival: NDArray[np.bool_],
+        weights: tuple[float, float, float],
+    ) -> NDArray[np.float64]:
+        """Per-agent reward (E, N): progress toward the goal, a time cost, a goal bonus once."""
+        shape = first_arrival.shape
+        out = np.empty(int(np.prod(shape)))
+        _reward_terms(
+            np.ascontiguousarray(before).reshape(-1, 2),
+            np.ascontiguousarray(after).reshape(-1, 2),
+            np.ascontiguousarray(goals).reshape(-1, 2),
+            np.ascontiguousarray(first_arrival).reshape(-1),
+            *weights,
+            out,
+        )
+        return out.reshape(shape)
+
+    @property
+    def rh_trigger(self) -> float:
+        """Distance under which the right-hand rule fires: given, or a multiple of R."""
+        if "rh_trigger_factor" in self.params:
+            return self.params["rh_trigger_factor"] * self.params["safety_radius"]
+        return float(self.params["rh_trigger"])
+
+    def at_goal(self, positions: NDArray, goals: NDArray) -> NDArray[np.bool_]:
+        """(..., N): agents within ``goal_tolerance`` of their goals."""
+        return norm(positions - goals) <= self.params["goal_tolerance"]
