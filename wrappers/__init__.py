@@ -11,3 +11,12 @@ __all__ = [
     "filtered_aec_env",
     "filtered_parallel_env",
 ]
+
+
+def __getattr__(name: str):
+    # SB3VecEnv needs stable-baselines3 (the train and dev extras): imported on first use only
+    if name == "SB3VecEnv":
+        from wrappers.sb3 import SB3VecEnv
+
+        return SB3VecEnv
+    raise AttributeError(f"module 'wrappers' has no attribute {name!r}")

@@ -1,0 +1,106 @@
+"""SB3VecEnv: a Stable-Baselines3 ``VecEnv`` over a ``BatchedEnv``, one slot per agent.
+
+Parameter sharing: every agent of every env is a slot (E x N of them, slot ``e * N + i`` is
+agent i of env e), all with the same spaces, stepped by one call of the batched core. All agents
+of an env end together; the env is reset on the same step and each of its slots gets
+``terminal_observation`` and ``TimeLimit.truncated`` (True only on truncation) in its info, as
+SB3's ``VecEnv`` contract asks. No SuperSuit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv
+
+from rsvo_env.vector import BatchedEnv
+
+# Per-slot signals copied into every info (the filter's work and the collision cost).
+SLOT_SIGNALS = ("intervention", "cost", "feasible")
+
+
+class SB3VecEnv(VecEnv):
+    """``venv``: the batched env; its ``num_envs * num_agents`` agents are the slots.
+
+    ``seed(s)`` (what ``PPO(..., seed=s)`` calls) seeds the next reset: env e with ``s + e``,
+    through the env's own generators, never numpy's global one.
+    """
+
+    def __init__(self, venv: BatchedEnv) -> None:
+        self.venv = venv
+        self.render_mode = None
+        self.agents_per_env = venv.num_agents
+        super().__init__(
+            venv.num_envs * venv.num_agents, venv.single_observation_space, venv.single_action_space
+        )
+        self._seed: int | None = None
+        self._actions: NDArray[np.float64] | None = None
+
+    # ---- the VecEnv contract ----------------------------------------------------------------
+    def seed(self, seed: int | None = None) -> Sequence[int | None]:
+        self._seed = seed
+        n = self.agents_per_env
+        self._seeds = [None if seed is None else seed + k // n for k in range(self.num_envs)]
+        return self._seeds
+
+    def reset(self) -> NDArray[np.float32]:
+        obs, info = self.venv.reset(seed=self._seed, options=self._options[0] or None)
+        self._seed = None
+        self.reset_infos = self._infos(info, np.zeros(self.venv.num_envs, dtype=bool))
+        return obs.reshape(self.num_envs, -1)
+
+    def step_async(self, actions: NDArray) -> None:
+        self._actions = np.asarray(actions).reshape(self.venv.num_envs, self.agents_per_env, 2)
+
+    def step_wait(self) -> tuple[NDArray, NDArray, NDArray, list[dict]]:
+        obs, reward, terminated, truncated, info = self.venv.step(self._actions)
+        n = self.agents_per_env
+        dones = np.repeat(terminated | truncated, n)
+        infos = self._infos(info, info["_final_obs"])
+        if dones.any():
+            final = info["final_obs"].reshape(self.num_envs, -1)
+            cut = np.repeat(truncated & ~terminated, n)
+            for k in np.flatnonzero(dones):
+                infos[k]["terminal_observation"] = final[k]
+                infos[k]["TimeLimit.truncated"] = bool(cut[k])
+        return obs.reshape(self.num_envs, -1), reward.reshape(-1).astype(np.float32), dones, infos
+
+    def _infos(self, info: dict[str, NDArray], ended: NDArray[np.bool_]) -> list[dict[str, Any]]:
+        """One dict a slot: its filter signals, and its env's episode values when it ended."""
+        columns = [info[key].reshape(-1).tolist() for key in SLOT_SIGNALS]
+        infos = [dict(zip(SLOT_SIGNALS, vals, strict=True)) for vals in zip(*columns, strict=True)]
+        if ended.any():
+            n = self.agents_per_env
+            episode = {k: v for k, v in info.items() if k.startswith("episode_")}
+            for e in np.flatnonzero(ended):
+                values = {k: v[e].item() for k, v in episode.items()}
+                for k in range(e * n, (e + 1) * n):
+                    infos[k].update(values)
+        return infos
+
+    def close(self) -> None:
+        self.venv.close()
+
+    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
+        """The batched env's attribute, once per selected slot (they share one env)."""
+        return [getattr(self.venv, attr_name)] * len(self._indices(indices))
+
+    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
+        setattr(self.venv, attr_name, value)
+
+    def env_method(self, method_name: str, *args: Any, indices: Any = None, **kwargs: Any) -> list:
+        result = getattr(self.venv, method_name)(*args, **kwargs)
+        return [result] * len(self._indices(indices))
+
+    def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
+        return [False] * len(self._indices(indices))
+
+    def _indices(self, indices: Any) -> Sequence[int]:
+        if indices is None:
+            return range(self.num_envs)
+        if isinstance(indices, int):
+            return [indices]
+        return list(indices)
