@@ -71,6 +71,52 @@ def sensing_radius(
     return (u + np.sqrt(u * u + (wg * safety_radius) ** 2)) / wg
 
 
+def agent_radii(
+    omega_floor: NDArray, gamma: float, safety_radius: float, lo: NDArray, hi: NDArray
+) -> NDArray[np.float64]:
+    """Per agent, the distance beyond which none of its rows with a positive weight can bind:
+    :func:`sensing_radius` of its own smallest positive weight (0 for an agent without one)."""
+    u = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
+    wg = np.where(np.isfinite(omega_floor), omega_floor, 0.0) * gamma
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = (u + np.sqrt(u * u + (wg * safety_radius) ** 2)) / wg
+    return np.where(wg > 0, r, 0.0)
+
+
+def weight_floor(omega: NDArray) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """For weight matrices (E, N, N): each agent's smallest positive weight (E, N) (inf when it
+    has none), and the pairs (P, 2), flat indices ``e * N + i`` with i < j, in which either side
+    has weight 0: such a row binds at any distance, so no radius may drop it."""
+    E, n = omega.shape[:2]
+    off = ~np.eye(n, dtype=bool)
+    floor = np.where(off & (omega > 0), omega, np.inf).min(axis=-1)
+    zero = off & ((omega == 0) | (np.swapaxes(omega, -1, -2) == 0)) & np.triu(off)
+    e, i, j = np.nonzero(zero)
+    return floor, np.stack([e * n + i, e * n + j], axis=1).astype(np.int64)
+
+
+def pairs_within_agent_radii(
+    positions: NDArray, radius: NDArray, required: NDArray | None = None
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Pairs (I < J, flat indices) of agents of the same env closer than the larger of their
+    two radii (E, N), plus the ``required`` pairs (P, 2), sorted: the all-pairs order, kept."""
+    E, n = positions.shape[:2]
+    r = radius.reshape(-1)
+    shifted = (positions + env_offsets(positions, float(r.max(initial=0.0)))).reshape(-1, 2)
+    hits = cKDTree(shifted).query_ball_point(shifted, r=r, return_sorted=False)
+    counts = np.fromiter((len(h) for h in hits), dtype=np.int64, count=len(hits))
+    src = np.repeat(np.arange(E * n, dtype=np.int64), counts)
+    dst = np.fromiter((k for h in hits for k in h), dtype=np.int64, count=int(counts.sum()))
+    pairs = np.stack([np.minimum(src, dst), np.maximum(src, dst)], axis=1)[src != dst]
+    if required is not None and len(required):
+        pairs = np.concatenate([pairs, required])
+    if len(pairs) == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty
+    pairs = np.unique(pairs, axis=0)  # sorted by (I, J)
+    return pairs[:, 0], pairs[:, 1]
+
+
 @functools.lru_cache(maxsize=64)
 def all_pairs(n: int, num_envs: int = 1) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Every unordered pair (I < J) of n agents in each of ``num_envs`` envs, as flat agent

@@ -23,8 +23,9 @@ from gymnasium.utils import seeding
 from numpy.typing import NDArray
 
 from rsvo_env import dynamics, observation, planar
+from rsvo_env.barriers import weight_floor
 from rsvo_env.metrics import EpisodeMetrics, collided
-from rsvo_env.neighbors import nearest_neighbors
+from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_neighbors
 from rsvo_env.responsibility import Weighting, smallest_weight, weight_matrix
 from rsvo_env.safety import FilterResult, SafetyFilter
 from rsvo_env.scenarios import Scenario
@@ -97,6 +98,10 @@ class Simulator:
         self.filters: list[SafetyFilter] = []
         self.penalties: list[float] = []
         self._warned_options: set[str] = set()
+        # bumped whenever a weight matrix changes (reset, theta, weighting)
+        self._omega_version = 0
+        self._floor_version = -1
+        self._floor_cache: tuple[NDArray, NDArray] | None = None
         self.rngs: list[np.random.Generator | None] = [None] * self.num_envs
         self.state = State.empty(self.num_envs, n, self.k)
         self.metrics = EpisodeMetrics(
@@ -143,6 +148,7 @@ class Simulator:
         omega = weight_matrix(th, self.state.weighting[e])
         self.state.theta[e], self.state.omega[e] = th, omega
         self.state.omega_min[e] = smallest_weight(omega)
+        self._omega_version += 1
 
     def set_weighting(self, e: int | None, weighting: Weighting) -> None:
         """Weighting of env e's running episode (all envs: None)."""
@@ -151,6 +157,7 @@ class Simulator:
         for i, omega in zip(envs, omegas, strict=True):
             self.state.omega[i], self.state.weighting[i] = omega, weighting
             self.state.omega_min[i] = smallest_weight(omega)
+            self._omega_version += 1
 
     # ---- episodes ---------------------------------------------------------------------------
     def check_options(self, options: dict | None) -> tuple[NDArray | None, Weighting]:
@@ -210,6 +217,7 @@ class Simulator:
             s.weighting[e] = weighting
         s.omega[idx] = weight_matrix(s.theta[idx], weighting)
         s.omega_min[idx] = smallest_weight(s.omega[idx])
+        self._omega_version += 1
         seg = s.goals[idx] - s.starts[idx]
         s.frame_angle[idx] = np.arctan2(seg[..., 1], seg[..., 0])
         self._derive()
@@ -257,6 +265,16 @@ class Simulator:
         return self.scenario.nominal(self.state)
 
     # ---- the step ---------------------------------------------------------------------------
+    def _floor(self) -> tuple[NDArray, NDArray] | None:
+        """The weights' floor for the large-N pair search, computed once per weight matrix."""
+        if self.n <= DENSE_MAX_AGENTS:
+            return None
+        # the core is the one writer of omega, and bumps the version on every write
+        if self._floor_version != self._omega_version:
+            self._floor_cache = weight_floor(self.state.omega)
+            self._floor_version = self._omega_version
+        return self._floor_cache
+
     def apply_filters(self, u_nominal: NDArray[np.float64]) -> tuple[NDArray, dict[str, Any]]:
         """The filter stage: every filter in turn on the state about to be integrated."""
         s = self.state
@@ -264,7 +282,14 @@ class Simulator:
         vel = s.velocities if self.scenario.dynamics == "double_integrator" else None
         for flt in self.filters:
             res: FilterResult = flt.apply(
-                s.positions, u, s.theta, vel, s.omega, omega_min=s.omega_min, nearest=s.nearest
+                s.positions,
+                u,
+                s.theta,
+                vel,
+                s.omega,
+                omega_min=s.omega_min,
+                nearest=s.nearest,
+                floor=self._floor(),
             )
             u = res.actions
             if stats is None:

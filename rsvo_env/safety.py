@@ -284,14 +284,18 @@ class SafetyFilter:
         with_rows: bool = False,
         omega_min: NDArray[np.float64] | None = None,
         nearest: NDArray[np.float64] | None = None,
+        floor: tuple[NDArray, NDArray] | None = None,
     ) -> FilterResult:
         """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
 
         One call of the row builder and one of the solver serve all E x N agents. Dense
         single-integrator scenes with the exact solver take one compiled pass
         (``solvers.dense``, the same arithmetic) unless ``with_rows`` asks for the rows. A caller
-        that keeps them passes each scene's smallest weight ``omega_min`` (E,) and each agent's
-        nearest distance ``nearest`` (E, N), which the large-N path needs.
+        that keeps them passes each scene's smallest weight ``omega_min`` (E,), each agent's
+        nearest distance ``nearest`` (E, N) and ``floor``, :func:`barriers.weight_floor` of the
+        weights, which the large-N path needs. There, each single-integrator agent examines its
+        neighbours within its own radius (:func:`barriers.agent_radii`): exact culling, so the
+        rows kept, and the solution, are those of all pairs.
         """
         cfg = self.config
         E, n = theta.shape
@@ -302,6 +306,12 @@ class SafetyFilter:
         if dense:
             # Few agents: every pair, and exact culling drops the rows that cannot bind.
             I, J = barriers.all_pairs(n, E)
+        elif cfg.dynamics == DYNAMICS[0] and cfg.neighbor_radius is None:
+            if floor is None:
+                W = weight_matrix(theta, cfg.weighting) if omega is None else omega
+                floor = barriers.weight_floor(W)
+            radii = barriers.agent_radii(floor[0], cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+            I, J = barriers.pairs_within_agent_radii(positions, radii, floor[1])
         else:
             radius = self.pair_radius(theta, omega, omega_min)
             I, J = barriers.candidate_pairs(positions, radius)
