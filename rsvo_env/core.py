@@ -23,9 +23,9 @@ from gymnasium.utils import seeding
 from numpy.typing import NDArray
 
 from rsvo_env import dynamics, observation, planar
-from rsvo_env.barriers import weight_floor
 from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_neighbors
+from rsvo_env.pairs import weight_floor
 from rsvo_env.responsibility import Weighting, smallest_weight, weight_matrix
 from rsvo_env.safety import FilterResult, SafetyFilter
 from rsvo_env.scenarios import Scenario

@@ -10,21 +10,18 @@ as the stage of its step right before integration.
 
 from __future__ import annotations
 
-import math
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import qpsolvers
 from numpy.typing import ArrayLike, NDArray
 
-from rsvo_env import barriers, solvers
+from rsvo_env import barriers, pairs, solvers
+from rsvo_env.filter_config import DYNAMICS, FilterConfig
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_distance
 from rsvo_env.planar import norm
 from rsvo_env.responsibility import (
-    WEIGHTING_MODES,
-    Weighting,
     min_pair_weight,
     pair_omega,
     smallest_weight,
@@ -33,107 +30,6 @@ from rsvo_env.responsibility import (
 )
 from rsvo_env.solvers import dense as dense_solver
 from rsvo_env.validation import check_theta, check_vectors, real_array
-
-DYNAMICS = ("single_integrator", "double_integrator")
-
-
-@dataclass(frozen=True)
-class FilterConfig:
-    """Validated parameters of the filter; a bad field raises ``ValueError`` naming it.
-
-    ``u_max`` / ``u_min`` bound each input component (velocity for the single integrator,
-    acceleration for the double integrator); ``u_min`` defaults to ``-u_max``. ``gamma`` is the
-    class-K gain of eq. ``cbf``; with ``dt`` given, ``gamma * dt <= 1`` is required, the bound
-    under which the Euler step keeps ``h+ >= (1 - gamma dt) h >= 0`` (``docs/math.md``).
-    ``neighbor_radius`` limits the pairs examined; below the computed sensing radius the
-    guarantee is lost and a warning says so.
-    """
-
-    gamma: float = 12.0
-    safety_radius: float = 1.0
-    u_max: float | tuple[float, float] = 3.0
-    u_min: float | tuple[float, float] | None = None
-    dt: float | None = None
-    dynamics: str = "single_integrator"
-    weighting: Weighting = "asymmetric"
-    solver: str = "exact"
-    barrier: str = "braking"
-    split: str = "capability"
-    gamma2: float | None = None
-    neighbor_radius: float | None = None
-    lo: NDArray[np.float64] = field(init=False, repr=False, compare=False)
-    hi: NDArray[np.float64] = field(init=False, repr=False, compare=False)
-
-    def __post_init__(self) -> None:
-        def positive(name: str, value: object) -> None:
-            try:
-                ok = (
-                    not isinstance(value, (bool, np.bool_, str, bytes))
-                    and math.isfinite(float(value))  # type: ignore[arg-type]
-                    and float(value) > 0  # type: ignore[arg-type]
-                )
-            except (TypeError, ValueError):
-                ok = False
-            if not ok:
-                raise ValueError(f"FilterConfig.{name} = {value!r} must be a finite number > 0")
-
-        positive("gamma", self.gamma)
-        positive("safety_radius", self.safety_radius)
-        if self.gamma2 is not None:
-            positive("gamma2", self.gamma2)
-        if self.dt is not None:
-            positive("dt", self.dt)
-            if self.gamma * self.dt > 1.0:
-                raise ValueError(
-                    f"FilterConfig.gamma * dt = {self.gamma} * {self.dt} = "
-                    f"{self.gamma * self.dt!r} > 1: the discrete step is then no longer "
-                    "guaranteed safe (need gamma * dt <= 1)"
-                )
-        if self.neighbor_radius is not None:
-            positive("neighbor_radius", self.neighbor_radius)
-        hi = np.broadcast_to(np.asarray(self.u_max, dtype=np.float64), (2,)).copy()
-        if self.u_min is None:
-            lo = -hi
-        else:
-            lo = np.broadcast_to(np.asarray(self.u_min, dtype=np.float64), (2,)).copy()
-        if not (np.isfinite(lo).all() and np.isfinite(hi).all()) or not (lo < hi).all():
-            raise ValueError(
-                f"FilterConfig needs finite u_min < u_max per component, got "
-                f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
-            )
-        if self.dynamics == "single_integrator" and not ((lo <= 0).all() and (hi >= 0).all()):
-            # u = 0 satisfies every row while h >= 0 only if the box holds 0: without it a pair in
-            # the safe set can have no safe action
-            raise ValueError(
-                f"FilterConfig: the single-integrator box must contain 0 (u_min <= 0 <= u_max), "
-                f"got u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
-            )
-        if self.dynamics == "double_integrator" and self.barrier == "braking":
-            if not ((lo < 0).all() and (hi > 0).all()):
-                raise ValueError(
-                    f"FilterConfig: the braking barrier needs u_min < 0 < u_max, got "
-                    f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
-                )
-        object.__setattr__(self, "lo", lo)
-        object.__setattr__(self, "hi", hi)
-        if self.dynamics not in DYNAMICS:
-            raise ValueError(f"FilterConfig.dynamics = {self.dynamics!r}; use one of {DYNAMICS}")
-        if not callable(self.weighting) and self.weighting not in WEIGHTING_MODES:
-            raise ValueError(
-                f"FilterConfig.weighting = {self.weighting!r}; use one of {WEIGHTING_MODES} "
-                "or a callable theta -> omega matrix"
-            )
-        if self.barrier not in barriers.BARRIERS:
-            raise ValueError(
-                f"FilterConfig.barrier = {self.barrier!r}; use one of {barriers.BARRIERS}"
-            )
-        if self.split not in barriers.SPLITS:
-            raise ValueError(f"FilterConfig.split = {self.split!r}; use one of {barriers.SPLITS}")
-        if self.solver != "exact" and self.solver not in qpsolvers.available_solvers:
-            raise ValueError(
-                f"FilterConfig.solver = {self.solver!r}; use 'exact' or an installed qpsolvers "
-                f"solver: {sorted(qpsolvers.available_solvers)}"
-            )
 
 
 @dataclass(slots=True)
@@ -197,7 +93,7 @@ class SafetyFilter:
         else:
             th = theta.reshape(-1, theta.shape[-1])
             w_min = min(min_pair_weight(t, cfg.weighting) for t in th)
-        radius = barriers.sensing_radius(w_min, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+        radius = pairs.sensing_radius(w_min, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
         if cfg.neighbor_radius is not None:
             if cfg.neighbor_radius < radius:
                 warnings.warn(
@@ -219,7 +115,7 @@ class SafetyFilter:
         if omega is None and callable(mode):
             omega = weight_matrix(theta, mode)
         if omega is not None:
-            return barriers.omega_pairs(np.ascontiguousarray(omega).reshape(-1, n), I, J, n)
+            return pairs.omega_pairs(np.ascontiguousarray(omega).reshape(-1, n), I, J, n)
         if mode == "symmetric":
             return np.full((len(I), 2), 0.5)
         th = theta.reshape(-1)
@@ -292,9 +188,9 @@ class SafetyFilter:
         single-integrator scenes with the exact solver take one compiled pass
         (``solvers.dense``, the same arithmetic) unless ``with_rows`` asks for the rows. A caller
         that keeps them passes each scene's smallest weight ``omega_min`` (E,), each agent's
-        nearest distance ``nearest`` (E, N) and ``floor``, :func:`barriers.weight_floor` of the
+        nearest distance ``nearest`` (E, N) and ``floor``, :func:`pairs.weight_floor` of the
         weights, which the large-N path needs. There, each single-integrator agent examines its
-        neighbours within its own radius (:func:`barriers.agent_radii`): exact culling, so the
+        neighbours within its own radius (:func:`pairs.agent_radii`): exact culling, so the
         rows kept, and the solution, are those of all pairs.
         """
         cfg = self.config
@@ -305,16 +201,16 @@ class SafetyFilter:
             return self._apply_dense(positions, nominal, theta, omega)
         if dense:
             # Few agents: every pair, and exact culling drops the rows that cannot bind.
-            I, J = barriers.all_pairs(n, E)
+            I, J = pairs.all_pairs(n, E)
         elif cfg.dynamics == DYNAMICS[0] and cfg.neighbor_radius is None:
             if floor is None:
                 W = weight_matrix(theta, cfg.weighting) if omega is None else omega
-                floor = barriers.weight_floor(W)
-            radii = barriers.agent_radii(floor[0], cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
-            I, J = barriers.pairs_within_agent_radii(positions, radii, floor[1])
+                floor = pairs.weight_floor(W)
+            radii = pairs.agent_radii(floor[0], cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+            I, J = pairs.pairs_within_agent_radii(positions, radii, floor[1])
         else:
             radius = self.pair_radius(theta, omega, omega_min)
-            I, J = barriers.candidate_pairs(positions, radius)
+            I, J = pairs.candidate_pairs(positions, radius)
         weights = self.pair_weights(theta, omega, I, J)
         if cfg.dynamics == "single_integrator":
             rows = barriers.single_integrator_rows(

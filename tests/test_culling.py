@@ -5,7 +5,7 @@ and the actions are those of the all-pairs filter."""
 import numpy as np
 import pytest
 
-from rsvo_env import barriers
+from rsvo_env import barriers, pairs
 from rsvo_env.safety import FilterConfig, SafetyFilter
 from rsvo_env.scenarios import Crowd
 from rsvo_env.solvers import exact
@@ -17,7 +17,7 @@ def crowd(n, seed):
 
 def all_pairs_actions(flt, x, nominal, theta):
     cfg = flt.config
-    I, J = barriers.all_pairs(len(x))
+    I, J = pairs.all_pairs(len(x))
     w = flt.pair_weights(theta, None, I, J)
     rows = barriers.single_integrator_rows(x, w, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
     return exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)[0]
@@ -43,7 +43,7 @@ def pairs_examined(theta, x):
 def global_radius_pairs(theta, x):
     """What one radius for every agent (from the smallest weight of all) examines."""
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0, dt=0.01))
-    return len(barriers.candidate_pairs(x[None], flt.pair_radius(theta, None))[0])
+    return len(pairs.candidate_pairs(x[None], flt.pair_radius(theta, None))[0])
 
 
 def test_personalities_do_not_blow_up_the_pair_search():

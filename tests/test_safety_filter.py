@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env import barriers
+from rsvo_env import barriers, pairs
 from rsvo_env.safety import FilterConfig, SafetyFilter
 
 
@@ -70,7 +70,7 @@ def test_culling_changes_no_solution(n, seed):
     nominal = rng.uniform(-2, 2, (n, 2))
     cfg = FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0)
     res = SafetyFilter(cfg).filter(x, nominal, theta)
-    I, J = barriers.candidate_pairs(x[None])
+    I, J = pairs.candidate_pairs(x[None])
     w = SafetyFilter(cfg).pair_weights(theta, None, I, J)
     full = barriers.single_integrator_rows(x, w, I, J, 10.0, 1.0, cfg.lo, cfg.hi, cull=False)
     from rsvo_env.solvers import exact
