@@ -98,6 +98,7 @@ class Simulator:
         self.filters: list[SafetyFilter] = []
         self.penalties: list[float] = []
         self._warned_options: set[str] = set()
+        self.residual: tuple[float, bool] | None = None
         # bumped whenever a weight matrix changes (reset, theta, weighting)
         self._omega_version = 0
         self._floor_version = -1
@@ -245,12 +246,27 @@ class Simulator:
         s.rh_active = self.scenario.right_hand_active(s)
 
     # ---- actions ----------------------------------------------------------------------------
+    def set_residual(self, gate_radius: float | None, right_hand: bool = True) -> None:
+        """Residual actions: an action is added to the scripted nominal command (with or without
+        the right-hand rule), gated off within ``gate_radius`` of the agent's goal, and the sum
+        is held to the speed limit like every other command. ``None`` turns it off."""
+        if gate_radius is not None and check_real(gate_radius, "gate_radius") < 0:
+            raise ValueError(f"gate_radius = {gate_radius!r} must be >= 0")
+        self.residual = None if gate_radius is None else (float(gate_radius), bool(right_hand))
+
     def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by
-        u_max, rotate out of the goal frame."""
+        u_max, rotate out of the goal frame; with residual actions, add them to the scripted
+        command (see :meth:`set_residual`)."""
         u = planar.clip_norm(actions, 1.0, self.u_max)
         if self.frame == "goal":
             u = planar.rotate(u, self.state.frame_angle)
+        if self.residual is not None:
+            gate, right_hand = self.residual
+            s = self.state
+            far = planar.norm(s.positions - s.goals) >= gate
+            u = self.scenario.nominal(s, right_hand) + np.where(far[..., None], u, 0.0)
+            u = planar.clip_norm(u, self.u_max)
         return u
 
     def to_actions(self, controls: NDArray[np.float64]) -> NDArray[np.float64]:

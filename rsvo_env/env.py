@@ -120,6 +120,10 @@ class RSVOParallelEnv(ParallelEnv):
         if self._started:
             self.sim.set_weighting(0, mode)
 
+    def set_residual(self, gate_radius: float | None, right_hand: bool = True) -> None:
+        """Residual actions on or off; see ``wrappers.ResidualAction``."""
+        self.sim.set_residual(gate_radius, right_hand)
+
     def add_safety_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
         """Turn on (another) filter stage of the core's step; see ``wrappers.RCBFSafetyFilter``."""
         self.sim.add_filter(flt, intervention_penalty)

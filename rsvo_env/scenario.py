@@ -144,11 +144,11 @@ class Scenario:
         """Polylines (K, 2) a picture of the scenario draws under the agents (none here)."""
         return []
 
-    def nominal(self, state: Any) -> NDArray[np.float64]:
+    def nominal(self, state: Any, right_hand: bool = True) -> NDArray[np.float64]:
         """Scripted nominal controls (E, N, 2) in physical units: move-to-goal (paper, Sec. V-A)
-        plus the right-hand rule."""
+        plus the right-hand rule (unless ``right_hand`` is False)."""
         u = nominal.move_to_goal(state.positions, state.goals, self.params["k"], self.u_max)
-        if self.params["deadlock_resolution"] == "right_hand":
+        if right_hand and self.params["deadlock_resolution"] == "right_hand":
             u = nominal.right_hand_rule(u, state.rh_active, self.params["rh_angle_deg"])
         return u
 

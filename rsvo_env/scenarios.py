@@ -125,7 +125,7 @@ class RampMerge(Scenario):
         hi = np.array([start[:, 0].max(), self.params["finish_y"]]) + 10.0
         return lo, hi
 
-    def nominal(self, state):
+    def nominal(self, state, right_hand=True):
         p = self.params
         return nominal.lane_following(
             state.positions,

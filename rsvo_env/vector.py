@@ -38,6 +38,9 @@ class BatchedEnv:
       last one (rows of other envs are not meaningful), and the signals and ``episode_*``
       values of this step are still those of the episode that ended.
 
+    ``action="residual"`` adds each action to the scripted nominal command (``gate_radius``,
+    ``residual_right_hand``: see ``Simulator.set_residual``).
+
     Reset options (``theta``, (N,) or (E, N), and ``weighting``) hold for the auto-resets that
     follow, until the next ``reset``. Every keyword of ``RSVOParallelEnv`` and of the scenario
     works here; ``safety_filter=False`` turns the filter off, and ``gamma``, ``solver``,
@@ -50,6 +53,9 @@ class BatchedEnv:
         num_envs: int = 1,
         safety_filter: bool = True,
         intervention_penalty: float = 0.0,
+        action: str = "direct",
+        gate_radius: float = 0.5,
+        residual_right_hand: bool = True,
         **kwargs: Any,
     ) -> None:
         """``kwargs``: the filter's ``gamma``, ``solver``, ``barrier``, ``split``,
@@ -66,6 +72,10 @@ class BatchedEnv:
                 f"filter parameters {sorted(filter_kwargs) or ['intervention_penalty']} need "
                 "safety_filter=True"
             )
+        if action not in ("direct", "residual"):
+            raise ValueError(f"action = {action!r}; use 'direct' or 'residual'")
+        if action == "residual":
+            self.sim.set_residual(gate_radius, residual_right_hand)
         self.num_envs, self.num_agents = self.sim.num_envs, self.sim.n
         self.single_observation_space, self.single_action_space = self.sim.spaces()
         low, high = self.single_observation_space.low, self.single_observation_space.high

@@ -1,0 +1,24 @@
+"""ResidualAction: an agent's action is a correction added to the scripted nominal command.
+
+The learner outputs a residual; the env adds it to the scripted move-to-goal command (with or
+without the right-hand rule), gates it off within ``gate_radius`` of the agent's goal (where the
+scripted controller already holds the agent inside the goal tolerance), and holds the sum to the
+speed limit like every other command. The safety filter, when on, filters the sum. A thin
+``BaseParallelWrapper``: it switches the core's residual mode and overrides nothing.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pettingzoo.utils import BaseParallelWrapper
+
+
+class ResidualAction(BaseParallelWrapper):
+    """``gate_radius``: distance to the goal (physical units) under which the residual is
+    ignored; ``right_hand``: whether the scripted command includes the right-hand rule."""
+
+    def __init__(self, env: Any, gate_radius: float = 0.5, right_hand: bool = True) -> None:
+        super().__init__(env)
+        env.unwrapped.set_residual(gate_radius, right_hand)
+        self.gate_radius, self.right_hand = gate_radius, right_hand
