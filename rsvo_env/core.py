@@ -108,7 +108,7 @@ class Simulator:
         self.metrics = EpisodeMetrics(
             self.num_envs, n, self.dt, self.safety_radius, record_series=record_series
         )
-        self.limits = observation.Limits(*self._extent(), p["theta_max"], self.safety_radius)
+        self.limits = observation.limits_for(scenario)
 
     # ---- configuration ----------------------------------------------------------------------
     def spaces(self) -> tuple[gymnasium.spaces.Box, gymnasium.spaces.Box]:
@@ -118,18 +118,6 @@ class Simulator:
             gymnasium.spaces.Box(low, high, dtype=np.float32),
             gymnasium.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32),
         )
-
-    def _extent(self) -> tuple[float, float]:
-        """Finite bounds on every position and velocity component reachable in an episode."""
-        sc = self.scenario
-        lo, hi = sc.arena()  # holds every start and goal
-        horizon = self.max_steps * self.dt
-        extent = float(max(np.abs(lo).max(), np.abs(hi).max()))
-        if sc.dynamics == "double_integrator":
-            v0 = float(sc.params.get("v0", 0.0))
-            v = v0 + sc.u_max * horizon
-            return extent + v0 * horizon + 0.5 * sc.u_max * horizon**2, v
-        return extent + sc.u_max * horizon, sc.u_max
 
     def add_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
         """Add a safety-filter stage before the stages already there (an outer wrapper's filter

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -27,6 +28,23 @@ class Limits:
     v: float
     theta_max: float
     R: float
+
+
+def limits_for(scenario: Any) -> Limits:
+    """Finite bounds on every position and velocity component a scenario's episode can reach:
+    the arena (every start and goal) grown by what the speed or acceleration limit allows over
+    ``max_steps``."""
+    p = scenario.params
+    lo, hi = scenario.arena()
+    horizon = p["max_steps"] * p["dt"]
+    extent = float(max(np.abs(lo).max(), np.abs(hi).max()))
+    u = scenario.u_max
+    if scenario.dynamics == "double_integrator":
+        v0 = float(p.get("v0", 0.0))
+        pos, vel = extent + v0 * horizon + 0.5 * u * horizon**2, v0 + u * horizon
+    else:
+        pos, vel = extent + u * horizon, u
+    return Limits(pos, vel, p["theta_max"], float(p["safety_radius"]))
 
 
 @dataclass(frozen=True)
