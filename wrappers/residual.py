@@ -5,6 +5,9 @@ without the right-hand rule), gates it off within ``gate_radius`` of the agent's
 scripted controller already holds the agent inside the goal tolerance), and holds the sum to the
 speed limit like every other command. The safety filter, when on, filters the sum. A thin
 ``BaseParallelWrapper``: it switches the core's residual mode and overrides nothing.
+
+With it, the scripted controller is the zero action; ``nominal_actions()`` still gives the
+scripted command itself (for a direct-action env), not a residual.
 """
 
 from __future__ import annotations
