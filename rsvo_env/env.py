@@ -79,6 +79,8 @@ class RSVOParallelEnv(ParallelEnv):
             )
         self.sim = make_simulator(scenario, num_envs=1, record_series=True, **kwargs)
         self.scenario = self.sim.scenario
+        # what print(env) shows, through any PettingZoo wrapper: the scenario, PettingZoo-style
+        self.metadata = {**self.metadata, "name": f"rsvo_{self.scenario.name}_v0"}
         self.render_mode = render_mode
         self.render_size = int(render_size)
         n = self.scenario.num_agents

@@ -94,9 +94,10 @@ def test_repr_names_scenario_and_filter():
     import wrappers
 
     env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("circular_swap"), gamma=10.0)
-    assert repr(env.unwrapped) == (
-        "RSVOParallelEnv('circular_swap', num_agents=6, filter=[gamma=10 exact])"
-    )
+    want = "RSVOParallelEnv('circular_swap', num_agents=6, filter=[gamma=10 exact])"
+    assert repr(env.unwrapped) == want
+    assert str(env) == "rsvo_circular_swap_v0"  # print(env) names the scenario
+    assert str(rsvo_env.parallel_env("crowd")) == "rsvo_crowd_v0"
 
 
 def test_the_project_points_nowhere_outside_itself():
