@@ -279,9 +279,15 @@ class Simulator:
             self._floor_version = self._omega_version
         return self._floor_cache
 
-    def apply_filters(self, u_nominal: NDArray[np.float64]) -> tuple[NDArray, dict[str, Any]]:
-        """The filter stage: every filter in turn on the state about to be integrated."""
+    def apply_filters(
+        self, u_nominal: NDArray[np.float64]
+    ) -> tuple[NDArray, dict[str, Any] | None, NDArray]:
+        """The filter stage: every filter in turn on the state about to be integrated. Returns
+        the safe controls, the filters' stats (None without a filter) and the intervention
+        ``|u_safe - u_nominal|``."""
         s = self.state
+        if not self.filters:
+            return u_nominal, None, np.zeros(u_nominal.shape[:-1])
         u, stats = u_nominal, None
         vel = s.velocities if self.scenario.dynamics == "double_integrator" else None
         for flt in self.filters:
@@ -313,7 +319,9 @@ class Simulator:
                 stats["n_capped_shares"] = stats["n_capped_shares"] + res.n_capped_shares
                 stats["min_h"] = np.minimum(stats["min_h"], res.min_h)
             stats["active"] = res.active
-        return u, stats
+        # one stage measured it already; stacked stages are measured end to end
+        intervention = res.intervention if len(self.filters) == 1 else planar.norm(u - u_nominal)
+        return u, stats, intervention
 
     def step(self, actions: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray, NDArray, dict]:
         """One step of every env on validated normalised actions (E, N, 2).
@@ -323,7 +331,7 @@ class Simulator:
         """
         s, sc = self.state, self.scenario
         u_nominal = self.to_controls(actions)
-        u, stats = self.apply_filters(u_nominal)
+        u, stats, intervention = self.apply_filters(u_nominal)
         before = s.positions
         if sc.dynamics == "double_integrator":
             s.positions, s.velocities = dynamics.double_integrator_step(
@@ -340,13 +348,12 @@ class Simulator:
         first_arrival = at_goal & ~s.reached
         s.reached |= at_goal
         reward = sc.reward(before, s.positions, s.goals, first_arrival, self.reward_weights)
-        intervention = planar.norm(u - u_nominal)
         penalty = sum(self.penalties)
         if penalty:
             reward = reward - penalty * intervention**2
         terminated = at_goal.all(axis=-1)
         truncated = ~terminated & (self.metrics.steps >= self.max_steps)
-        signals = self.signals(u_nominal, u, intervention, stats, at_goal, rh)
+        signals = self.signals(u_nominal, u, intervention, stats)
         return self.observe(), reward, terminated, truncated, signals
 
     def signals(
@@ -355,8 +362,6 @@ class Simulator:
         u_safe: NDArray | None = None,
         intervention: NDArray | None = None,
         stats: dict | None = None,
-        at_goal: NDArray | None = None,
-        rh: NDArray | None = None,
     ) -> dict[str, NDArray]:
         """Per-agent signals (E, N, ...), the same keys, dtypes and shapes at reset (controls
         zero, no filter work) and at every step."""
@@ -373,8 +378,8 @@ class Simulator:
             "max_violation": stats.get("max_violation", np.zeros((E, n))),
             "min_distance": s.nearest,
             "cost": collided(s.nearest, self.safety_radius).astype(np.float64),
-            "at_goal": s.at_goal if at_goal is None else at_goal,
-            "rh_active": s.rh_active if rh is None else rh,
+            "at_goal": s.at_goal,
+            "rh_active": s.rh_active,
         }
 
     def observe(self, envs: NDArray[np.int64] | None = None) -> NDArray[np.float32]:

@@ -17,15 +17,6 @@ from numba import njit
 from numpy.typing import NDArray
 
 
-def passed_midpoint(
-    positions: NDArray[np.float64], starts: NDArray[np.float64], goals: NDArray[np.float64]
-) -> NDArray[np.bool_]:
-    """Agents whose projection on their start-goal segment is past its middle."""
-    seg = goals - starts
-    progress = np.einsum("...j,...j->...", positions - starts, seg)
-    return progress >= 0.5 * np.einsum("...j,...j->...", seg, seg)
-
-
 def resolution_gain(
     onset_sym: int, resolved_sym: int, onset_asym: int, resolved_asym: int
 ) -> float:
@@ -85,7 +76,7 @@ def _accumulate(
             step_min = min(step_min, nearest[e, i])
             step_sum += nearest[e, i]
             any_rh = any_rh or rh[e, i]
-            # past the midpoint of the start-goal segment (``passed_midpoint``)
+            # past the middle of its start-goal segment: its projection on it beyond half-way
             sx, sy = goals[e, i, 0] - starts[e, i, 0], goals[e, i, 1] - starts[e, i, 1]
             px, py = after[e, i, 0] - starts[e, i, 0], after[e, i, 1] - starts[e, i, 1]
             all_mid = all_mid and (px * sx + py * sy >= 0.5 * (sx * sx + sy * sy))
@@ -205,21 +196,8 @@ class EpisodeMetrics:
             self.min_distance_series.append(float(self._series[0, 0]))
             self.avg_min_distance_series.append(float(self._series[0, 1]))
 
-    def flat_row(self, e: int = 0) -> tuple:
-        """Env e's :meth:`flat` values, in :data:`FLAT_FIELDS` order, as Python scalars."""
-        c = self.counts[e]
-        return (
-            int(c[0]),
-            bool(c[3] >= 0),
-            int(c[3]),
-            float(self.min_distance[e]),
-            int(c[4]),
-            int(self.infeasible[e]),
-        )
-
-    def flat(self) -> dict[str, NDArray]:
-        """(E,) arrays ``episode_<field>`` of the running episodes (final on their last step)."""
-        values = {
+    def _flat_values(self) -> dict[str, NDArray]:
+        return {
             "steps": self.steps,
             "success": self.completed >= 0,
             "completed": self.completed,
@@ -227,7 +205,16 @@ class EpisodeMetrics:
             "collision_steps": self.collision_steps,
             "infeasible": self.infeasible,
         }
+
+    def flat(self) -> dict[str, NDArray]:
+        """(E,) arrays ``episode_<field>`` of the running episodes (final on their last step)."""
+        values = self._flat_values()
         return {f"episode_{k}": values[k].astype(dtype) for k, dtype in FLAT_FIELDS}
+
+    def flat_row(self, e: int = 0) -> tuple:
+        """Env e's :meth:`flat` values, in :data:`FLAT_FIELDS` order, as Python scalars."""
+        values = self._flat_values()
+        return tuple(dtype(values[k][e]).item() for k, dtype in FLAT_FIELDS)
 
     def summary(self, e: int = 0) -> dict[str, Any]:
         """Env e's episode as plain Python values and arrays."""

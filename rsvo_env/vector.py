@@ -111,16 +111,15 @@ class BatchedEnv:
         a = check_vectors(actions, "actions", self.num_agents, lead=(self.num_envs,))
         obs, reward, terminated, truncated, signals = self.sim.step(a)
         done = terminated | truncated
-        final_obs = obs
+        # the ended envs' last observations, kept before their new episode overwrites them
+        final_obs = obs.copy() if done.any() else obs
+        info = self._info(signals, final_obs, done)
         if done.any():
             envs = np.flatnonzero(done)
-            final_obs = obs.copy()
-            info = self._info(signals, final_obs, done)
             theta, weighting = self._reset_args
             self.sim.reset(envs, [None] * len(envs), theta, weighting)
             obs[envs] = self.sim.observe(envs)
-            return obs, reward, terminated, truncated, info
-        return obs, reward, terminated, truncated, self._info(signals, final_obs, done)
+        return obs, reward, terminated, truncated, info
 
     def _info(self, signals: dict, final_obs: NDArray, done: NDArray) -> dict[str, NDArray]:
         info = dict(signals)
