@@ -4,11 +4,10 @@
 
     actions -> controls (clip norm, scale, frame) -> [filter stage] -> integrate -> signals
 
-The filter stage is a list of :class:`rsvo_env.safety.SafetyFilter` applied right before
-integration to the state being integrated, so the control the filter certifies is the control
-integrated, whatever wrappers are stacked around the adapters. Adapters (``RSVOParallelEnv`` for
-E = 1 with PettingZoo dicts, ``BatchedEnv`` for E envs) only change the shape of the API.
-Each env has its own seeded generator; this class is the one writer of the state.
+The filter stage (:class:`rsvo_env.safety.SafetyFilter` s) acts right before integration on the
+state being integrated: the control it certifies is the one integrated, whatever the wrappers.
+Adapters (``RSVOParallelEnv``: E = 1, dicts; ``BatchedEnv``: arrays) only reshape the API. Each
+env has its own seeded generator; this class is the one writer of the state.
 """
 
 from __future__ import annotations
@@ -27,7 +26,7 @@ from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_neighbors
 from rsvo_env.pairs import weight_floor
 from rsvo_env.responsibility import Weighting, smallest_weight, weight_matrix
-from rsvo_env.safety import FilterResult, SafetyFilter
+from rsvo_env.safety import FilterResult, SafetyFilter, merge_stats
 from rsvo_env.scenarios import Scenario
 from rsvo_env.state import State
 from rsvo_env.validation import check_real
@@ -38,10 +37,9 @@ RESET_OPTIONS = ("theta", "weighting")
 class Simulator:
     """State arrays (E, N, ...), per-env generators and per-env reset, and the step above.
 
-    ``weighting`` is the default mode of every episode (a reset option overrides it for one
-    reset); ``reward_*`` weigh the scenario's reward terms; ``record_series`` (E = 1 only) keeps
-    the per-step series the paper plots.
-    """
+    ``weighting``: every episode's default (a reset option overrides it once); ``reward_*``
+    weigh the reward terms (``reward_team``: the share of each agent's reward replaced by its
+    env's mean); ``record_series`` (E = 1) keeps the series the paper plots."""
 
     def __init__(
         self,
@@ -53,6 +51,7 @@ class Simulator:
         reward_progress: float = 1.0,
         reward_time: float = 0.01,
         reward_goal: float = 10.0,
+        reward_team: float = 0.0,
         record_series: bool = False,
     ) -> None:
         n = scenario.num_agents
@@ -82,6 +81,9 @@ class Simulator:
                 (reward_goal, "reward_goal"),
             )
         )
+        self.reward_team = check_real(reward_team, "reward_team")
+        if not 0.0 <= self.reward_team <= 1.0:
+            raise ValueError(f"reward_team = {reward_team!r} must be in [0, 1]")
         p = scenario.params
         self.dt, self.max_steps, self.u_max = float(p["dt"]), int(p["max_steps"]), scenario.u_max
         self.safety_radius = float(p["safety_radius"])
@@ -98,7 +100,7 @@ class Simulator:
         self.filters: list[SafetyFilter] = []
         self.penalties: list[float] = []
         self._warned_options: set[str] = set()
-        self.residual: tuple[float, bool] | None = None
+        self.residual: tuple[float, bool, float] | None = None
         # bumped whenever a weight matrix changes (reset, theta, weighting)
         self._omega_version = 0
         self._floor_version = -1
@@ -110,7 +112,6 @@ class Simulator:
         )
         self.limits = observation.limits_for(scenario)
 
-    # ---- configuration ----------------------------------------------------------------------
     def spaces(self) -> tuple[gymnasium.spaces.Box, gymnasium.spaces.Box]:
         """One agent's observation and action spaces (bounded Boxes, float32)."""
         low, high = observation.bounds(self.limits, self.k)
@@ -233,14 +234,19 @@ class Simulator:
         s.at_goal = self.scenario.at_goal(s.positions, s.goals)
         s.rh_active = self.scenario.right_hand_active(s)
 
-    # ---- actions ----------------------------------------------------------------------------
-    def set_residual(self, gate_radius: float | None, right_hand: bool = True) -> None:
-        """Residual actions: an action is added to the scripted nominal command (with or without
-        the right-hand rule), gated off within ``gate_radius`` of the agent's goal, and the sum
-        is held to the speed limit like every other command. ``None`` turns it off."""
+    def set_residual(
+        self, gate_radius: float | None, right_hand: bool = True, scale: float = 1.0
+    ) -> None:
+        """Residual actions (``None``: off): an action (norm clipped to 1, times ``scale``
+        u_max) is added to the scripted command (with or without the right-hand rule), gated off
+        within ``gate_radius`` of the goal, and the sum held to the speed limit. At ``scale``
+        1 a residual can turn a full-speed command by up to 90 degrees, at 2 also reverse it."""
         if gate_radius is not None and check_real(gate_radius, "gate_radius") < 0:
             raise ValueError(f"gate_radius = {gate_radius!r} must be >= 0")
-        self.residual = None if gate_radius is None else (float(gate_radius), bool(right_hand))
+        if not check_real(scale, "residual scale") > 0:
+            raise ValueError(f"residual scale = {scale!r} must be > 0")
+        on = gate_radius is not None
+        self.residual = (float(gate_radius), bool(right_hand), float(scale)) if on else None
 
     def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by
@@ -250,10 +256,10 @@ class Simulator:
         if self.frame == "goal":
             u = planar.rotate(u, self.state.frame_angle)
         if self.residual is not None:
-            gate, right_hand = self.residual
+            gate, right_hand, scale = self.residual
             s = self.state
             far = planar.norm(s.positions - s.goals) >= gate
-            u = self.scenario.nominal(s, right_hand) + np.where(far[..., None], u, 0.0)
+            u = self.scenario.nominal(s, right_hand) + np.where(far[..., None], scale * u, 0.0)
             u = planar.clip_norm(u, self.u_max)
         return u
 
@@ -302,23 +308,7 @@ class Simulator:
                 floor=self._floor(),
             )
             u = res.actions
-            if stats is None:
-                stats = {
-                    "feasible": res.feasible,
-                    "max_violation": res.max_violation,
-                    "n_unrecoverable_pairs": res.n_unrecoverable_pairs,
-                    "n_capped_shares": res.n_capped_shares,
-                    "min_h": res.min_h,
-                }
-            else:
-                stats["feasible"] = stats["feasible"] & res.feasible
-                stats["max_violation"] = np.maximum(stats["max_violation"], res.max_violation)
-                stats["n_unrecoverable_pairs"] = (
-                    stats["n_unrecoverable_pairs"] + res.n_unrecoverable_pairs
-                )
-                stats["n_capped_shares"] = stats["n_capped_shares"] + res.n_capped_shares
-                stats["min_h"] = np.minimum(stats["min_h"], res.min_h)
-            stats["active"] = res.active
+            stats = merge_stats(stats, res)
         # one stage measured it already; stacked stages are measured end to end
         intervention = res.intervention if len(self.filters) == 1 else planar.norm(u - u_nominal)
         return u, stats, intervention
@@ -351,6 +341,9 @@ class Simulator:
         penalty = sum(self.penalties)
         if penalty:
             reward = reward - penalty * intervention**2
+        if self.reward_team:
+            # each agent also shares its env's mean reward (the reward_team share of it)
+            reward = reward + self.reward_team * (reward.mean(-1, keepdims=True) - reward)
         terminated = at_goal.all(axis=-1)
         truncated = ~terminated & (self.metrics.steps >= self.max_steps)
         signals = self.signals(u_nominal, u, intervention, stats)

@@ -72,7 +72,8 @@ class RSVOParallelEnv(ParallelEnv):
         **kwargs: Any,
     ) -> None:
         """``kwargs``: ``num_obs_neighbors``, ``frame``, ``weighting``, ``reward_progress``,
-        ``reward_time``, ``reward_goal``, ``max_cycles``, and every scenario parameter."""
+        ``reward_time``, ``reward_goal``, ``reward_team``, ``max_cycles``, and every scenario
+        parameter."""
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode = {render_mode!r}; use one of {self.metadata['render_modes']}"
@@ -122,9 +123,11 @@ class RSVOParallelEnv(ParallelEnv):
         if self._started:
             self.sim.set_weighting(0, mode)
 
-    def set_residual(self, gate_radius: float | None, right_hand: bool = True) -> None:
+    def set_residual(
+        self, gate_radius: float | None, right_hand: bool = True, scale: float = 1.0
+    ) -> None:
         """Residual actions on or off; see ``wrappers.ResidualAction``."""
-        self.sim.set_residual(gate_radius, right_hand)
+        self.sim.set_residual(gate_radius, right_hand, scale)
 
     def add_safety_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
         """Turn on (another) filter stage of the core's step; see ``wrappers.RCBFSafetyFilter``."""

@@ -296,3 +296,25 @@ class SafetyFilter:
             d = (nearest_distance(positions) if nearest is None else nearest).min(axis=-1)
             out = np.minimum(out, d**2 - self.config.safety_radius**2)
         return out
+
+
+def merge_stats(stats: dict[str, Any] | None, res: FilterResult) -> dict[str, Any]:
+    """The filter stage's stats after one more stacked filter: feasible only if every filter
+    was, the largest violation, counts summed, the smallest barrier; ``active`` the last's."""
+    if stats is None:
+        return {
+            "feasible": res.feasible,
+            "max_violation": res.max_violation,
+            "n_unrecoverable_pairs": res.n_unrecoverable_pairs,
+            "n_capped_shares": res.n_capped_shares,
+            "min_h": res.min_h,
+            "active": res.active,
+        }
+    return {
+        "feasible": stats["feasible"] & res.feasible,
+        "max_violation": np.maximum(stats["max_violation"], res.max_violation),
+        "n_unrecoverable_pairs": stats["n_unrecoverable_pairs"] + res.n_unrecoverable_pairs,
+        "n_capped_shares": stats["n_capped_shares"] + res.n_capped_shares,
+        "min_h": np.minimum(stats["min_h"], res.min_h),
+        "active": res.active,
+    }

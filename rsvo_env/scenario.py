@@ -26,6 +26,8 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "deadlock_resolution": "right_hand",
     "theta": None,
     "theta_max": 1000.0,
+    # (low, high): each episode draws every agent's theta uniformly from it (env's generator)
+    "theta_range": None,
 }
 DEADLOCK_RESOLUTIONS = ("right_hand", "none")
 
@@ -74,7 +76,10 @@ class Scenario:
         for key, default in {**COMMON_DEFAULTS, **self.defaults}.items():
             # every real-valued parameter must be real and finite (a NaN would only surface
             # later, as an error naming no field)
-            if isinstance(default, float):
+            if isinstance(default, bool):
+                if not isinstance(params[key], (bool, np.bool_)):
+                    raise ValueError(f"{self.name}.{key} = {params[key]!r} must be True or False")
+            elif isinstance(default, float):
                 params[key] = check_real(params[key], f"{self.name}.{key}")
             elif isinstance(default, tuple):
                 arr = real_array(params[key], f"{self.name}.{key}")
@@ -96,6 +101,23 @@ class Scenario:
             raise ValueError(f"{self.name}.max_steps = {steps!r} must be an integer >= 1")
         if params["theta"] is not None:
             self.check_theta(params["theta"])
+        if params["theta_range"] is not None:
+            params["theta_range"] = self._check_theta_range(params["theta_range"])
+
+    def _check_theta_range(self, value: Any) -> tuple[float, float]:
+        arr = real_array(value, f"{self.name}.theta_range")
+        if arr.shape != (2,) or not np.isfinite(arr).all() or not 0 < arr[0] <= arr[1]:
+            raise ValueError(
+                f"{self.name}.theta_range = {value!r} must be (low, high) with 0 < low <= high"
+            )
+        if arr[1] > self.params["theta_max"]:
+            raise ValueError(
+                f"{self.name}.theta_range = {value!r} exceeds theta_max = "
+                f"{self.params['theta_max']}"
+            )
+        if self.params["theta"] is not None:
+            raise ValueError(f"{self.name}: give theta or theta_range, not both")
+        return float(arr[0]), float(arr[1])
 
     # -- parameters the env reads -------------------------------------------------------------
     @property
@@ -127,6 +149,9 @@ class Scenario:
     def default_theta(self, rng: np.random.Generator) -> NDArray[np.float64]:
         if self.params["theta"] is not None:
             return self.check_theta(self.params["theta"])
+        if self.params["theta_range"] is not None:
+            low, high = self.params["theta_range"]
+            return rng.uniform(low, high, self.num_agents)
         return np.ones(self.num_agents)
 
     # -- what subclasses provide --------------------------------------------------------------

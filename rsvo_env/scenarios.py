@@ -61,11 +61,15 @@ class CircularSwap(Scenario):
         "rh_angle_deg": 60.0,
         "rh_trigger": 1.1,
         "max_steps": 2000,
+        # rotate the whole circle by a uniform random angle each episode (env's generator)
+        "random_rotation": False,
     }
 
     def initial_state(self, rng):
         n = self.num_agents
         angles = 2.0 * np.pi * np.arange(n) / n
+        if self.params["random_rotation"]:
+            angles = angles + rng.uniform(0.0, 2.0 * np.pi)
         start = self.params["circle_radius"] * np.stack([np.cos(angles), np.sin(angles)], 1)
         return start, np.zeros_like(start), -start
 

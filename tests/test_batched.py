@@ -132,3 +132,25 @@ def test_filtered_batch_is_safe():
         to_centre = -x / np.maximum(np.linalg.norm(x, axis=-1, keepdims=True), 1e-9)
         _, _, _, _, info = venv.step(to_centre)
         assert info["min_distance"].min() >= 1.0 - 1e-9 and info["feasible"].all()
+
+
+@pytest.mark.parametrize("share", [0.0, 0.5, 1.0])
+def test_team_reward_shares_the_env_mean_and_keeps_the_total(share):
+    kwargs = {"num_agents": 4, "num_envs": 3}
+    own = BatchedEnv("crowd", **kwargs)
+    team = BatchedEnv("crowd", reward_team=share, **kwargs)
+    own.reset(seed=1)
+    team.reset(seed=1)
+    for _ in range(5):
+        r_own = own.step(own.nominal_actions())[1]
+        r_team = team.step(team.nominal_actions())[1]
+    np.testing.assert_allclose(r_team.sum(-1), r_own.sum(-1), rtol=1e-12)
+    expected = (1 - share) * r_own + share * r_own.mean(-1, keepdims=True)
+    np.testing.assert_allclose(r_team, expected, rtol=1e-12, atol=1e-15)
+    assert share == 0.0 or not np.allclose(r_team, r_own)  # the test can fail
+
+
+@pytest.mark.parametrize("share", [-0.1, 1.5, float("nan"), "1", True])
+def test_a_bad_team_share_is_refused(share):
+    with pytest.raises(ValueError, match="reward_team"):
+        BatchedEnv("crowd", num_agents=3, reward_team=share)

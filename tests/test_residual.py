@@ -85,3 +85,27 @@ def test_bad_residual_settings_are_refused():
         wrappers.ResidualAction(rsvo_env.parallel_env("crowd"), gate_radius=-1)
     with pytest.raises(ValueError, match="gate_radius"):
         BatchedEnv("crowd", num_envs=2, action="residual", gate_radius=float("nan"))
+
+
+@pytest.mark.parametrize("scale, expected", [(1.0, 0.0), (2.0, -1.0)])
+def test_the_residual_scale_decides_whether_a_full_speed_command_can_reverse(scale, expected):
+    """A residual straight against a full-speed scripted command: at scale 1 it cancels it, at
+    scale 2 it reverses it (to the speed limit)."""
+    venv = BatchedEnv(
+        "position_swap", action="residual", residual_scale=scale, safety_filter=False,
+        deadlock_resolution="none",
+    )  # fmt: skip
+    venv.reset(seed=0)
+    x0 = venv.sim.state.positions.copy()
+    toward = venv.sim.state.goals - x0
+    toward /= np.linalg.norm(toward, axis=-1, keepdims=True)
+    venv.step(-toward)
+    moved = venv.sim.state.positions - x0
+    u_max, dt = venv.scenario.u_max, venv.scenario.params["dt"]
+    np.testing.assert_allclose(moved, expected * u_max * dt * toward, atol=1e-12)
+
+
+@pytest.mark.parametrize("scale", [0.0, -1.0, float("nan"), "2"])
+def test_a_bad_residual_scale_is_refused(scale):
+    with pytest.raises(ValueError, match="residual scale"):
+        BatchedEnv("crowd", num_agents=3, action="residual", residual_scale=scale)

@@ -86,3 +86,30 @@ def test_seeded_ppo_runs_are_identical():
     assert not all(
         torch.equal(x, y) for x, y in zip(a, c.policy.parameters(), strict=True)
     )  # another seed, other parameters: the test can fail
+
+
+def test_single_parallel_env_path_equals_the_batched_one():
+    """SB3VecEnv over one filtered ParallelEnv (wrapped, dicts) gives the same slots, values and
+    end-of-episode infos as over a BatchedEnv of one env, through an auto-reset."""
+    kwargs = {"num_agents": 4, "max_steps": 12}
+    single = wrappers.SB3VecEnv(
+        wrappers.ResidualAction(wrappers.filtered_parallel_env("crowd", **kwargs))
+    )
+    batched = wrappers.SB3VecEnv(BatchedEnv("crowd", num_envs=1, action="residual", **kwargs))
+    assert single.num_envs == batched.num_envs == 4
+    for env in (single, batched):
+        env.seed(7)
+    assert np.array_equal(single.reset(), batched.reset())
+    rng = np.random.default_rng(2)
+    ended = 0
+    for _ in range(30):
+        a = rng.uniform(-1, 1, (4, 2)).astype(np.float32)
+        s, b = single.step(a), batched.step(a)
+        for x, y in zip(s[:3], b[:3], strict=True):
+            assert np.array_equal(x, y)
+        for i, j in zip(s[3], b[3], strict=True):
+            assert i.keys() == j.keys()
+            for key in i:
+                assert np.array_equal(i[key], j[key]), key
+        ended += int(s[2].all())
+    assert ended == 2  # two episodes of 12 steps ended, each with all four slots together

@@ -27,11 +27,35 @@ def test_core_does_not_import_upper_floors():
     for path in (ROOT / "rsvo_env").rglob("*.py"):
         if "cli" in path.relative_to(ROOT / "rsvo_env").parts:
             continue
-        for node in ast.walk(ast.parse(path.read_text())):
-            names = []
-            if isinstance(node, ast.Import):
-                names = [a.name for a in node.names]
-            elif isinstance(node, ast.ImportFrom) and node.module:
-                names = [node.module]
-            offenders += [f"{path}: {n}" for n in names if n.split(".")[0] in forbidden]
+        offenders += [f"{path}: {n}" for n in imported(path) if n.split(".")[0] in forbidden]
     assert not offenders, offenders
+
+
+def imported(path: Path) -> list[str]:
+    names = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            names.append(node.module)
+    return names
+
+
+def test_wrappers_never_import_training_or_benchmarks():
+    offenders = [
+        f"{path}: {name}"
+        for path in (ROOT / "wrappers").rglob("*.py")
+        for name in imported(path)
+        if name.split(".")[0] in ("training", "benchmarks")
+    ]
+    assert not offenders, offenders
+
+
+def test_no_module_over_400_lines():
+    too_long = [
+        f"{path.relative_to(ROOT)}: {n}"
+        for folder in ("rsvo_env", "wrappers", "training", "benchmarks", "tests")
+        for path in (ROOT / folder).rglob("*.py")
+        if (n := len(path.read_text().splitlines())) > 400
+    ]
+    assert not too_long, too_long

@@ -19,9 +19,13 @@ from pettingzoo.utils import BaseParallelWrapper
 
 class ResidualAction(BaseParallelWrapper):
     """``gate_radius``: distance to the goal (physical units) under which the residual is
-    ignored; ``right_hand``: whether the scripted command includes the right-hand rule."""
+    ignored; ``right_hand``: whether the scripted command includes the right-hand rule;
+    ``scale``: the residual's largest norm in speed limits (2 lets it reverse a full-speed
+    command, 1 only turn it)."""
 
-    def __init__(self, env: Any, gate_radius: float = 0.5, right_hand: bool = True) -> None:
+    def __init__(
+        self, env: Any, gate_radius: float = 0.5, right_hand: bool = True, scale: float = 1.0
+    ) -> None:
         super().__init__(env)
-        env.unwrapped.set_residual(gate_radius, right_hand)
-        self.gate_radius, self.right_hand = gate_radius, right_hand
+        env.unwrapped.set_residual(gate_radius, right_hand, scale)
+        self.gate_radius, self.right_hand, self.scale = gate_radius, right_hand, scale

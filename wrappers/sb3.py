@@ -1,4 +1,5 @@
-"""SB3VecEnv: a Stable-Baselines3 ``VecEnv`` over a ``BatchedEnv``, one slot per agent.
+"""SB3VecEnv: a Stable-Baselines3 ``VecEnv`` over a ``BatchedEnv`` (or one ParallelEnv), one slot
+per agent.
 
 Parameter sharing: every agent of every env is a slot (E x N of them, slot ``e * N + i`` is
 agent i of env e), all with the same spaces, stepped by one call of the batched core. All agents
@@ -17,19 +18,23 @@ from numpy.typing import NDArray
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from rsvo_env.vector import BatchedEnv
+from wrappers.parallel_batch import ParallelBatch
 
 # Per-slot signals copied into every info (the filter's work and the collision cost).
 SLOT_SIGNALS = ("intervention", "cost", "feasible")
 
 
 class SB3VecEnv(VecEnv):
-    """``venv``: the batched env; its ``num_envs * num_agents`` agents are the slots.
+    """``venv``: the batched env, whose ``num_envs * num_agents`` agents are the slots, or one
+    PettingZoo ParallelEnv of ours (seen through :class:`ParallelBatch`: N slots).
 
     ``seed(s)`` (what ``PPO(..., seed=s)`` calls) seeds the next reset: env e with ``s + e``,
     through the env's own generators, never numpy's global one.
     """
 
-    def __init__(self, venv: BatchedEnv) -> None:
+    def __init__(self, venv: Any) -> None:
+        if not isinstance(venv, BatchedEnv):
+            venv = ParallelBatch(venv)
         self.venv = venv
         self.render_mode = None
         self.agents_per_env = venv.num_agents

@@ -1,0 +1,147 @@
+"""Training throughput, in one process: PPO through the batched env against the single-env path.
+
+Both runs train the circular_swap residual config (6 agents, filter on, dt 0.1) with PPO, the
+same hyperparameters and the same rollout size (6144 agent-steps an update):
+
+* batched: ``SB3VecEnv(BatchedEnv(num_envs=16))``, 96 slots, ``n_steps = 64``;
+* single: ``SB3VecEnv`` over one filtered ``RSVOParallelEnv`` with ``ResidualAction`` (PettingZoo
+  dicts, 6 slots), ``n_steps = 1024``.
+
+For each: agent-steps per second with the PPO updates included, and the share of wall time in
+the env step (filter included), in the filter stage alone, in the policy's forward passes
+during rollouts (the rest of the rollout) and in the PPO update. One torch thread. Each figure is
+the best of ``--repeats`` alternating runs. Writes ``benchmarks/results/training_speed.md``.
+
+    python benchmarks/training_speed.py [--updates 4] [--repeats 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import torch
+from stable_baselines3 import PPO
+from stable_baselines3.common.vec_env import VecMonitor
+
+from rsvo_env.safety import SafetyFilter
+from training import config as configs
+from wrappers.sb3 import SB3VecEnv
+
+ROOT = Path(__file__).resolve().parents[1]
+ROLLOUT = 6144
+
+
+class Timer:
+    """Accumulated seconds of the wrapped callables."""
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = {}
+
+    def wrap(self, name: str, fn: Any) -> Any:
+        self.seconds.setdefault(name, 0.0)
+
+        def timed(*args: Any, **kwargs: Any) -> Any:
+            t0 = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                self.seconds[name] += time.perf_counter() - t0
+
+        return timed
+
+
+def run(path: str, updates: int) -> dict[str, float]:
+    cfg = configs.resolve(configs.load("circular_swap"))
+    if path == "batched":
+        venv = SB3VecEnv(configs.make_env(cfg, num_envs=16))
+    else:
+        venv = SB3VecEnv(configs.make_parallel(cfg))
+    n_steps = ROLLOUT // venv.num_envs
+    hyper = {**cfg["ppo"], "n_steps": n_steps}
+    model = PPO("MlpPolicy", VecMonitor(venv), seed=0, verbose=0, **hyper)
+    timer = Timer()
+    venv.step_wait = timer.wrap("env", venv.step_wait)
+    model.train = timer.wrap("update", model.train)
+    original = SafetyFilter.apply
+    SafetyFilter.apply = timer.wrap("filter", original)
+    try:
+        model.learn(n_steps * venv.num_envs)  # first update: compiles, warms caches
+        timer.seconds = dict.fromkeys(timer.seconds, 0.0)
+        t0 = time.perf_counter()
+        model.learn(updates * ROLLOUT, reset_num_timesteps=False)
+        total = time.perf_counter() - t0
+    finally:
+        SafetyFilter.apply = original
+    s = timer.seconds
+    return {
+        "rate": updates * ROLLOUT / total,
+        "env": s["env"] / total,
+        "filter": s["filter"] / total,
+        "update": s["update"] / total,
+        "policy": 1.0 - (s["env"] + s["update"]) / total,
+    }
+
+
+def sampling_ratio(best: dict[str, dict[str, float]]) -> float:
+    """Batched / single agent-steps per second of the rollouts alone (update time removed)."""
+    b, s = best["batched"], best["single"]
+    return (b["rate"] / (1.0 - b["update"])) / (s["rate"] / (1.0 - s["update"]))
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--updates", type=int, default=4)
+    p.add_argument("--repeats", type=int, default=3)
+    args = p.parse_args()
+    torch.set_num_threads(1)
+    best: dict[str, dict[str, float]] = {}
+    for _ in range(args.repeats):
+        for path in ("batched", "single"):
+            r = run(path, args.updates)
+            if path not in best or r["rate"] > best[path]["rate"]:
+                best[path] = r
+    ratio = best["batched"]["rate"] / best["single"]["rate"]
+    lines = [
+        "# Training throughput: PPO through the batched env vs the single-env path",
+        "",
+        f"`python benchmarks/training_speed.py --updates {args.updates} "
+        f"--repeats {args.repeats}` on {platform.processor() or platform.machine()}, "
+        f"Python {sys.version.split()[0]}, torch {torch.__version__}, one torch thread.",
+        "",
+        "circular_swap residual config (6 agents, filter on, dt 0.1), PPO, 6144 agent-steps an "
+        "update, 5 epochs; best of the alternating runs. Shares are of wall time; the filter is "
+        "part of the env step.",
+        "",
+        "| path | agent-steps/s (updates included) | env step | of which filter | policy "
+        "forward | PPO update |",
+        "|---|---|---|---|---|---|",
+    ]
+    for path, label in (("batched", "BatchedEnv, 16 envs"), ("single", "one ParallelEnv")):
+        r = best[path]
+        lines.append(
+            f"| {label} | {r['rate']:.0f} | {r['env']:.0%} | {r['filter']:.0%} | "
+            f"{r['policy']:.0%} | {r['update']:.0%} |"
+        )
+    ceiling = 1.0 / best["single"]["update"]
+    lines += [
+        "",
+        f"Batched / single: **{ratio:.1f}x**. Sampling alone (env step and policy forward, "
+        f"updates excluded): {sampling_ratio(best):.1f}x. The PPO update is the same work on "
+        "both paths (same rollout, epochs and minibatches), so with these hyperparameters no "
+        "env, however fast, could make the batched path more than 1 / (the single path's "
+        f"update share) = {ceiling:.1f}x faster than the single one.",
+        "",
+    ]
+    out = ROOT / "benchmarks" / "results" / "training_speed.md"
+    out.write_text("\n".join(lines))
+    print("\n".join(lines))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

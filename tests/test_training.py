@@ -1,0 +1,128 @@
+"""training.train and training.evaluate through their real entry points, and their configs."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+import yaml
+
+from training import config as configs
+from training import evaluate, train
+from training.evaluation import run_episodes, scripted_policy
+
+SMALL = [
+    "--scenario", "circular_swap", "--set", "env.num_agents=4", "--num-envs", "2",
+    "--set", "env.num_obs_neighbors=3",
+    "--set", "ppo.n_steps=32", "--set", "ppo.batch_size=128", "--set", "validation.every=1024",
+    "--set", "validation.episodes=3", "--set", "checkpoint_every=2048", "--no-progress",
+]  # fmt: skip
+
+
+def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys):
+    run = tmp_path / "run"
+    assert train.main([*SMALL, "--timesteps", "3000", "--seed", "1", "--out", str(run)]) == 0
+    for name in ("config.yaml", "model.zip", "best_model.zip", "progress.csv", "summary.json"):
+        assert (run / name).is_file(), name
+    assert list((run / "checkpoints").glob("model_*_steps.zip"))
+    assert list(run.glob("events.out.tfevents.*"))  # TensorBoard
+    with open(run / "progress.csv") as f:
+        rows = list(csv.DictReader(f))
+    logged = {k for row in rows for k, v in row.items() if v != ""}
+    for key in ("rollout/success_rate", "rollout/completion_time", "rollout/intervention_rate",
+                "rollout/cost", "rollout/infeasible_steps", "rollout/ep_rew_mean",
+                "eval/success_rate"):  # fmt: skip
+        assert key in logged, key
+    # no collision anywhere in training: the logged cost is zero in every row
+    assert all(float(r["rollout/collision_steps_total"] or 0) == 0 for r in rows)
+    with open(run / "validation.csv") as f:
+        validations = list(csv.DictReader(f))
+    assert len(validations) >= 3 and all(int(v["collisions"]) == 0 for v in validations)
+    saved = yaml.safe_load((run / "config.yaml").read_text())
+    assert saved["env"]["num_agents"] == 4 and saved["seed"] == 1 and saved["algo"] == "ppo"
+
+    gif = tmp_path / "episode.gif"
+    args = [str(run / "model.zip"), "--episodes", "6", "--seed", "5", "--compare-scripted"]
+    assert evaluate.main([*args, "--gif", str(gif)]) == 0
+    report = json.loads((run / "evaluation.json").read_text())
+    assert report["policy"]["episodes"] == 6 and report["policy"]["collisions"] == 0
+    assert report["scripted"]["collisions"] == 0
+    assert report["policy"]["min_distance"] >= 1.0 * (1 - 1e-9)
+    assert report["paired_completion_time"]["paired_seeds"] >= 1
+    assert gif.stat().st_size > 0
+    assert "paired: policy - scripted" in capsys.readouterr().out
+
+
+def test_time_limit_stops_training_and_saves(tmp_path):
+    run = tmp_path / "run"
+    args = [*SMALL, "--timesteps", "10000000", "--time-limit", "2", "--out", str(run)]
+    assert train.main(args) == 0
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["stopped_by_time_limit"] is True
+    assert summary["agent_steps"] < 10_000_000 and (run / "model.zip").is_file()
+
+
+@pytest.mark.parametrize(
+    "extra, words",
+    [
+        (["--set", "env.dt=0.2"], ["gamma * dt", "2"]),
+        (["--set", "env.gamma=-1"], ["gamma", "-1"]),
+        (["--set", "bogus=1"], ["bogus"]),
+        (["--set", "nokey"], ["key=value"]),
+        (["--set", "env.theta_range=[0, 3]"], ["theta_range"]),
+        (["--scenario", "nowhere"], ["nowhere", "circular_swap"]),
+        (["--time-limit", "0"], ["time-limit"]),
+        (["--timesteps", "0"], ["timesteps", "0"]),
+    ],
+)
+def test_bad_configs_fail_before_training_naming_the_field(tmp_path, capsys, extra, words):
+    with pytest.raises(SystemExit) as exit_:
+        train.main([*SMALL, *extra, "--out", str(tmp_path / "r")])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert all(w in err for w in words), err
+    assert not (tmp_path / "r" / "model.zip").exists()
+
+
+def test_every_scenario_has_a_valid_config_with_gamma_dt_at_most_one():
+    for path in sorted(configs.CONFIG_DIR.glob("*.yaml")):
+        cfg = configs.resolve(configs.load(path=path))
+        env = configs.make_env(cfg, num_envs=1)
+        assert env.sim.filters[0].config.gamma * env.scenario.params["dt"] <= 1.0
+    names = {p.stem for p in configs.CONFIG_DIR.glob("*.yaml")}
+    assert names == {"circular_swap", "crowd", "position_swap", "ramp_merge"}
+
+
+def test_zero_residual_is_the_scripted_controller_on_the_same_seeds():
+    """The comparison protocol pairs seeds exactly: a zero residual reproduces the scripted
+    controller's episodes value for value."""
+    cfg = configs.resolve(configs.load("circular_swap"))
+
+    def zero(obs, env):
+        return np.zeros((*obs.shape[:-1], 2))
+
+    a = run_episodes(cfg, zero, 4, seed=11)
+    b = run_episodes(cfg, scripted_policy, 4, seed=11, action="direct")
+    for key in ("success", "completion_time", "steps"):
+        assert np.array_equal(a[key], b[key]), key
+    # the scripted command reaches the direct env as a float32 action: equal to float32 precision
+    for key in ("min_distance", "return"):
+        assert np.allclose(a[key], b[key], rtol=1e-5), key
+    c = run_episodes(cfg, scripted_policy, 4, seed=12, action="direct")
+    assert not np.array_equal(b["min_distance"], c["min_distance"])  # other seeds, other episodes
+
+
+def test_readme_states_the_circular_config_as_it_is():
+    """README's training section describes the shipped config; hold it to the YAML."""
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    text = " ".join(readme.split("## Training a policy behind the filter", 1)[1].split())
+    cfg = configs.resolve(configs.load("circular_swap"))
+    env = cfg["env"]
+    assert "(dt 0.1 s, γ 10, a 30 s time cap)" in text
+    assert (env["dt"], env["gamma"], env["max_steps"] * env["dt"]) == (0.1, 10.0, 30.0)
+    assert "each agent of 16 batched envs" in text and cfg["num_envs"] == 16
+    assert "U(1, 10)" in text and env["theta_range"] == [1.0, 10.0] and env["random_rotation"]
+    assert "6 M agent-steps" in text and cfg["timesteps"] == 6_000_000
+    assert env["frame"] == "goal" and cfg["action"] == "residual" and cfg["algo"] == "ppo"

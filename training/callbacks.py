@@ -1,0 +1,129 @@
+"""Stable-Baselines3 callbacks of a training run: the filter's episode statistics in the logs,
+validation on held-out seeds, and a wall-clock budget."""
+
+from __future__ import annotations
+
+import csv
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from stable_baselines3.common.callbacks import BaseCallback
+
+from training.evaluation import model_policy, run_episodes, summarize
+
+
+class EpisodeStats(BaseCallback):
+    """Logs, over the episodes that ended since the last dump, under ``rollout/``: mean return
+    per agent, success rate, completion time, intervention rate, collision steps (the cost) and
+    infeasible steps. Read from each slot's info; an env's episode counts once (its first slot)."""
+
+    def __init__(self, agents_per_env: int, u_max: float, dt: float) -> None:
+        super().__init__()
+        self.n, self.u_max, self.dt = agents_per_env, u_max, dt
+        self.totals: dict[str, float] = {}
+
+    def _on_training_start(self) -> None:
+        slots = self.training_env.num_envs
+        self.returns = np.zeros(slots)
+        self.touched = np.zeros(slots)
+        self.collisions = 0
+        self.episodes: list[tuple[float, ...]] = []
+
+    def _on_step(self) -> bool:
+        infos, dones = self.locals["infos"], self.locals["dones"]
+        self.returns += self.locals["rewards"]
+        self.touched += [i["intervention"] > 1e-6 * self.u_max for i in infos]
+        for k in np.flatnonzero(dones):
+            if k % self.n:
+                continue
+            info, agents = infos[k], slice(k, k + self.n)
+            steps = info["episode_steps"]
+            completed = info["episode_completed"]
+            self.episodes.append(
+                (
+                    float(self.returns[agents].mean()),
+                    float(info["episode_success"]),
+                    completed * self.dt if completed >= 0 else np.nan,
+                    float(self.touched[agents].sum() / (steps * self.n)),
+                    float(info["episode_collision_steps"]),
+                    float(info["episode_infeasible"]),
+                )
+            )
+            self.collisions += info["episode_collision_steps"]
+        self.returns[dones] = 0.0
+        self.touched[dones] = 0.0
+        return True
+
+    def _on_rollout_end(self) -> None:
+        if not self.episodes:
+            return
+        rows = np.array(self.episodes)
+        names = ("return", "success_rate", "completion_time", "intervention_rate", "cost")
+        for j, name in enumerate(names):
+            column = rows[:, j]
+            if not np.isnan(column).all():
+                self.logger.record(f"rollout/{name}", float(np.nanmean(column)))
+        self.logger.record("rollout/infeasible_steps", float(rows[:, 5].sum()))
+        self.logger.record("rollout/collision_steps_total", int(self.collisions))
+        self.episodes = []
+
+
+class Validation(BaseCallback):
+    """Every ``every`` agent-steps: the deterministic policy on the held-out seeds
+    ``seed, seed + 1, ...``, logged under ``eval/`` and appended to ``validation.csv``; the best
+    model so far (success rate, then completion time) is saved as ``best_model.zip``."""
+
+    def __init__(self, cfg: dict[str, Any], out: Path) -> None:
+        super().__init__()
+        val = cfg["validation"]
+        self.cfg, self.out = cfg, out
+        self.every, self.episodes, self.seed = val["every"], val["episodes"], val["seed"]
+        self.next_at = self.every
+        self.best: tuple[float, float] | None = None
+
+    def _on_step(self) -> bool:
+        if self.every and self.num_timesteps >= self.next_at:
+            self.next_at += self.every
+            self.validate()
+        return True
+
+    def validate(self) -> dict[str, float]:
+        policy = model_policy(self.model)
+        stats = summarize(run_episodes(self.cfg, policy, self.episodes, self.seed))
+        for key in ("success_rate", "completion_time", "collisions", "infeasible", "return"):
+            self.logger.record(f"eval/{key}", stats[key])
+        path = self.out / "validation.csv"
+        row = {"timesteps": self.num_timesteps, **stats}
+        new = not path.exists()
+        with open(path, "a", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=list(row))
+            if new:
+                writer.writeheader()
+            writer.writerow(row)
+        time_key = -stats["completion_time"] if stats["success_rate"] > 0 else -np.inf
+        score = (stats["success_rate"], time_key)
+        if self.best is None or score > self.best:
+            self.best = score
+            self.model.save(self.out / "best_model.zip")
+        return stats
+
+
+class TimeLimit(BaseCallback):
+    """Stops training once ``seconds`` of wall-clock time have passed (checked every step)."""
+
+    def __init__(self, seconds: float | None) -> None:
+        super().__init__()
+        self.seconds = seconds
+        self.start = time.perf_counter()
+        self.hit = False
+
+    def _on_training_start(self) -> None:
+        self.start = time.perf_counter()
+
+    def _on_step(self) -> bool:
+        if self.seconds is not None and time.perf_counter() - self.start > self.seconds:
+            self.hit = True
+            return False
+        return True

@@ -1,0 +1,151 @@
+"""Training configs: a YAML file per scenario, CLI overrides, validation, and the envs they make.
+
+A config is a plain dict (``configs/<scenario>.yaml``); :func:`resolve` merges the overrides and
+checks every field before anything is built, so a bad value fails with its name, not deep inside
+SB3. The resolved config is saved beside the model and is all :mod:`training.evaluate` needs.
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from rsvo_env.vector import BatchedEnv
+
+CONFIG_DIR = Path(__file__).parent / "configs"
+ALGOS = ("ppo", "sac")
+ACTIONS = ("direct", "residual")
+WEIGHTINGS = ("asymmetric", "symmetric")
+TOP_KEYS = {
+    "scenario", "algo", "action", "gate_radius", "residual_right_hand", "residual_scale",
+    "weighting", "num_envs",
+    "timesteps", "env", "ppo", "sac", "validation", "checkpoint_every", "seed", "threads",
+    "engine", "rllib",
+}  # fmt: skip
+ENGINES = ("sb3", "rllib")
+
+
+def load(scenario: str | None = None, path: str | Path | None = None) -> dict[str, Any]:
+    """The config of a scenario (``configs/<scenario>.yaml``) or of a file."""
+    if path is None:
+        if scenario is None:
+            raise ValueError("give a scenario or a config path")
+        path = CONFIG_DIR / f"{scenario}.yaml"
+        if not path.exists():
+            known = sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
+            raise ValueError(f"no config for scenario {scenario!r}; configs exist for {known}")
+    with open(path) as f:
+        cfg = yaml.safe_load(f)
+    if not isinstance(cfg, dict):
+        raise ValueError(f"{path}: a config is a mapping, got {type(cfg).__name__}")
+    return cfg
+
+
+def set_value(cfg: dict[str, Any], assignment: str) -> None:
+    """Apply ``key.sub=value`` (the value parsed as YAML) to a config in place."""
+    if "=" not in assignment:
+        raise ValueError(f"--set {assignment!r}: use key=value, e.g. env.num_agents=8")
+    key, raw = assignment.split("=", 1)
+    node = cfg
+    *parents, leaf = key.split(".")
+    for part in parents:
+        node = node.setdefault(part, {})
+        if not isinstance(node, dict):
+            raise ValueError(f"--set {assignment!r}: {part!r} is not a section")
+    node[leaf] = yaml.safe_load(raw)
+
+
+def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
+    """A checked copy of ``cfg`` with the non-None ``overrides`` (top-level keys) applied."""
+    out = copy.deepcopy(cfg)
+    out.update({k: v for k, v in overrides.items() if v is not None})
+    out.setdefault("seed", 0)
+    out.setdefault("threads", 1)
+    out.setdefault("env", {})
+    out.setdefault("engine", "sb3")
+    unknown = sorted(set(out) - TOP_KEYS)
+    if unknown:
+        raise ValueError(f"unknown config key(s) {unknown}; known: {sorted(TOP_KEYS)}")
+    choices = (("algo", ALGOS), ("action", ACTIONS), ("weighting", WEIGHTINGS), ("engine", ENGINES))
+    for key, allowed in choices:
+        if out.get(key) not in allowed:
+            raise ValueError(f"config {key} = {out.get(key)!r}; use one of {allowed}")
+    for key in ("num_envs", "timesteps", "seed", "threads"):
+        value = out.get(key)
+        least = 0 if key == "seed" else 1
+        if isinstance(value, bool) or not isinstance(value, int) or value < least:
+            raise ValueError(f"config {key} = {value!r} must be an integer >= {least}")
+    section = "rllib" if out["engine"] == "rllib" else out["algo"]
+    if out["engine"] == "rllib" and out["algo"] != "ppo":
+        raise ValueError(f"config algo = {out['algo']!r}: the rllib engine trains ppo")
+    if not isinstance(out.get(section), dict):
+        raise ValueError(f"config has no {section!r} section of hyperparameters")
+    # build one env now: every scenario, filter and observation field is checked by the env
+    env = make_env(out, num_envs=1)
+    gamma, dt = env.sim.filters[0].config.gamma, env.scenario.params["dt"]
+    if gamma * dt > 1.0 + 1e-12:
+        raise ValueError(
+            f"env gamma * dt = {gamma} * {dt} = {gamma * dt:.4g} > 1: the discrete-time safety "
+            "guarantee needs gamma * dt <= 1; lower gamma or dt"
+        )
+    val = out.setdefault("validation", {})
+    val.setdefault("every", 0)
+    val.setdefault("episodes", 20)
+    val.setdefault("seed", 900_000)
+    out.setdefault("checkpoint_every", 0)
+    return out
+
+
+def make_env(
+    cfg: dict[str, Any],
+    num_envs: int,
+    action: str | None = None,
+    weighting: str | None = None,
+    **env_overrides: Any,
+) -> BatchedEnv:
+    """The filtered batched env a config describes (``action``/``weighting``: another choice,
+    e.g. ``action="direct"`` for the scripted controller under the same protocol)."""
+    env_kwargs = {**cfg["env"], **env_overrides}
+    if "theta_range" in env_kwargs and env_kwargs["theta_range"] is not None:
+        env_kwargs["theta_range"] = tuple(env_kwargs["theta_range"])
+    return BatchedEnv(
+        cfg["scenario"],
+        num_envs=num_envs,
+        action=action or cfg["action"],
+        gate_radius=cfg.get("gate_radius", 0.5),
+        residual_right_hand=cfg.get("residual_right_hand", True),
+        residual_scale=cfg.get("residual_scale", 1.0),
+        weighting=weighting or cfg["weighting"],
+        **env_kwargs,
+    )
+
+
+def save(cfg: dict[str, Any], path: str | Path) -> None:
+    with open(path, "w") as f:
+        yaml.safe_dump(cfg, f, sort_keys=False)
+
+
+def make_parallel(
+    cfg: dict[str, Any], render_mode: str | None = None, action: str | None = None
+) -> Any:
+    """The same env as a filtered PettingZoo ParallelEnv (one env: videos, the single-env path)."""
+    from wrappers import ResidualAction
+    from wrappers.safety_filter import filtered_parallel_env
+
+    env_kwargs = dict(cfg["env"])
+    if env_kwargs.get("theta_range") is not None:
+        env_kwargs["theta_range"] = tuple(env_kwargs["theta_range"])
+    env = filtered_parallel_env(
+        cfg["scenario"], render_mode=render_mode, weighting=cfg["weighting"], **env_kwargs
+    )
+    if (action or cfg["action"]) == "residual":
+        env = ResidualAction(
+            env,
+            cfg.get("gate_radius", 0.5),
+            cfg.get("residual_right_hand", True),
+            cfg.get("residual_scale", 1.0),
+        )
+    return env

@@ -1,0 +1,135 @@
+"""Evaluate a trained model (with the config saved beside it) on seeded episodes, filter on.
+
+    python -m training.evaluate runs/circular/model.zip --episodes 100 --seed 1000 \\
+        --compare-scripted --gif runs/circular/episode.gif
+
+Prints and saves (``evaluation.json`` beside the model, or ``--out``) the success rate, mean
+completion time, collisions, infeasible steps and mean intervention. ``--compare-scripted`` runs
+the scripted controller under the same protocol (same seeds, dt, speed limit, filter and time
+cap) and reports the paired difference of completion times with its standard error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from training import config as configs
+from training.evaluation import (
+    model_policy,
+    paired,
+    record_gif,
+    run_episodes,
+    scripted_policy,
+    summarize,
+)
+
+
+def load_model(path: str | Path) -> tuple[Any, dict[str, Any]]:
+    """The policy of a trained model and the resolved config saved beside it (``config.yaml``
+    in its run directory, or in the directory above for a checkpoint). ``path``: an SB3
+    ``.zip``, or an RLlib checkpoint directory written by ``--engine rllib``."""
+    path = Path(path)
+    if not path.exists():
+        raise ValueError(f"model {str(path)!r} does not exist")
+    for folder in (path.parent, path.parent.parent):
+        if (folder / "config.yaml").exists():
+            cfg = configs.resolve(configs.load(path=folder / "config.yaml"))
+            break
+    else:
+        raise ValueError(f"no config.yaml beside {str(path)!r}: was it written by training.train?")
+    if (path / "learner_group").is_dir():
+        from training.rllib_engine import load_module, module_policy
+
+        return module_policy(load_module(path)), cfg
+    from stable_baselines3 import PPO, SAC
+
+    algo = {"ppo": PPO, "sac": SAC}[cfg["algo"]]
+    return model_policy(algo.load(path, device="cpu")), cfg
+
+
+def describe(name: str, stats: dict[str, float]) -> str:
+    return (
+        f"{name:>9}: success {stats['success_rate']:.0%}, completion "
+        f"{stats['completion_time']:.3f} s, collisions {stats['collisions']}, infeasible steps "
+        f"{stats['infeasible']}, intervention {stats['intervention']:.3f} m/s "
+        f"(rate {stats['intervention_rate']:.2f}), smallest distance {stats['min_distance']:.4f}"
+    )
+
+
+def evaluate(
+    model_path: str | Path,
+    episodes: int,
+    seed: int,
+    compare_scripted: bool = False,
+    gif: str | None = None,
+    weighting: str | None = None,
+) -> dict[str, Any]:
+    """The evaluation as a dict (what ``evaluation.json`` holds)."""
+    import torch
+
+    policy, cfg = load_model(model_path)
+    torch.set_num_threads(cfg["threads"])
+    learned = run_episodes(cfg, policy, episodes, seed, weighting=weighting)
+    result: dict[str, Any] = {
+        "model": str(model_path),
+        "episodes": episodes,
+        "seed": seed,
+        "weighting": weighting or cfg["weighting"],
+        "policy": summarize(learned),
+    }
+    if compare_scripted:
+        scripted = run_episodes(cfg, scripted_policy, episodes, seed, "direct", weighting)
+        result["scripted"] = summarize(scripted)
+        result["paired_completion_time"] = paired(learned, scripted)
+    if gif:
+        result["gif"] = record_gif(cfg, policy, seed, gif, fps=round(1 / cfg["env"]["dt"]))
+    return result
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(
+        prog="python -m training.evaluate",
+        description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("model", help="a model.zip (SB3) or checkpoint directory (RLlib) of a run")
+    p.add_argument("--episodes", type=int, default=100)
+    p.add_argument("--seed", type=int, default=1000, help="episode k is seeded seed + k")
+    p.add_argument("--compare-scripted", action="store_true")
+    p.add_argument("--weighting", choices=configs.WEIGHTINGS, help="default: the config's")
+    p.add_argument("--gif", help="write the first episode as a GIF here")
+    p.add_argument("--out", help="the JSON report (default: evaluation.json beside the model)")
+    args = p.parse_args(argv)
+    if args.episodes < 1:
+        p.exit(2, f"{p.prog}: error: --episodes = {args.episodes} must be >= 1\n")
+    try:
+        result = evaluate(
+            args.model, args.episodes, args.seed, args.compare_scripted, args.gif, args.weighting
+        )
+    except ValueError as err:
+        p.exit(2, f"{p.prog}: error: {err}\n")
+    print(f"{args.episodes} episodes, seeds {args.seed}..{args.seed + args.episodes - 1}")
+    print(describe("policy", result["policy"]))
+    if args.compare_scripted:
+        print(describe("scripted", result["scripted"]))
+        d = result["paired_completion_time"]
+        print(
+            f"   paired: policy - scripted completion = {d['mean_difference']:+.3f} s "
+            f"+- {d['standard_error']:.3f} (SE) over {d['paired_seeds']} seeds both finish; "
+            f"{d['relative_change']:+.1%} +- {d['relative_standard_error']:.1%}"
+        )
+    if args.gif:
+        print(f"GIF: {result['gif']}")
+    out = Path(args.out) if args.out else Path(args.model).parent / "evaluation.json"
+    with open(out, "w") as f:
+        json.dump(result, f, indent=2)
+    print(f"report: {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
