@@ -40,6 +40,9 @@ SOLVER_OPTIONS: dict[str, dict[str, Any]] = {
 }
 
 
+CLARABEL_DEFAULTS: dict[str, Any] = {"max_iter": 400}
+
+
 def available_solvers() -> list[str]:
     return list(qpsolvers.available_solvers)
 
@@ -143,13 +146,21 @@ def solve_one(
     # A sliver of slack keeps the shifted polygon non-empty for the interior-point solver; it
     # is kept tiny (relative to the box), since along a row nearly parallel to a box edge it
     # widens a single-point polygon into a strip much longer than itself.
+    # The projection from another solver, never the LP's vertex passed off as one: clarabel at
+    # tight tolerances, then at its defaults, which converge where many nearly parallel rows
+    # stall the tight run at "almost solved" (its answer is still checked feasible to 1e-9).
+    attempts = [(solver, opts)] + [
+        ("clarabel", o)
+        for o in (SOLVER_OPTIONS["clarabel"], CLARABEL_DEFAULTS)
+        if (solver, opts) != ("clarabel", o)
+    ]
     x = None
     for rel in (1e-12, 1e-10, 1e-9):
         slack = max(t, 0.0) + rel * (scale + abs(t))
-        x = _qp(nominal, A, b + slack * norms, lo, hi, solver, opts)
-        if x is None and solver != "clarabel":
-            # the projection from another solver, never the LP's vertex passed off as one
-            x = _qp(nominal, A, b + slack * norms, lo, hi, "clarabel", SOLVER_OPTIONS["clarabel"])
+        for name, o in attempts:
+            x = _qp(nominal, A, b + slack * norms, lo, hi, name, o)
+            if x is not None:
+                break
         if x is not None:
             break
     if x is None:
