@@ -126,3 +126,13 @@ def test_readme_states_the_circular_config_as_it_is():
     assert "U(1, 10)" in text and env["theta_range"] == [1.0, 10.0] and env["random_rotation"]
     assert "6 M agent-steps" in text and cfg["timesteps"] == 6_000_000
     assert env["frame"] == "goal" and cfg["action"] == "residual" and cfg["algo"] == "ppo"
+
+
+def test_sac_trains_and_evaluates_through_the_same_entry_points(tmp_path):
+    run = tmp_path / "sac"
+    args = [*SMALL, "--algo", "sac", "--timesteps", "1200", "--set", "sac.learning_starts=400"]
+    assert train.main([*args, "--set", "sac.gradient_steps=1", "--out", str(run)]) == 0
+    assert yaml.safe_load((run / "config.yaml").read_text())["algo"] == "sac"
+    assert evaluate.main([str(run / "model.zip"), "--episodes", "2", "--seed", "3"]) == 0
+    report = json.loads((run / "evaluation.json").read_text())
+    assert report["policy"]["collisions"] == 0 and report["policy"]["episodes"] == 2
