@@ -47,14 +47,13 @@ RUNS = {
 }
 
 
-def evaluate(run: Path, weighting: str | None = None) -> dict:
+def evaluate(run: Path) -> dict:
     policy, cfg = load_model(run / "best_model.zip")
-    learned = run_episodes(cfg, policy, EPISODES, SEED, weighting=weighting)
-    scripted = run_episodes(cfg, scripted_policy, EPISODES, SEED, "direct", weighting)
+    learned = run_episodes(cfg, policy, EPISODES, SEED)
+    scripted = run_episodes(cfg, scripted_policy, EPISODES, SEED, "direct")
     summary = json.loads((run / "summary.json").read_text())
     return {
         "cfg": cfg,
-        "learned": learned,
         "policy": summarize(learned),
         "scripted": summarize(scripted),
         "paired": paired(learned, scripted),

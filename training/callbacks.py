@@ -11,7 +11,13 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
-from training.evaluation import model_policy, run_episodes, summarize
+from training.evaluation import (
+    intervened,
+    model_policy,
+    run_episodes,
+    summarize,
+    validation_score,
+)
 
 
 class EpisodeStats(BaseCallback):
@@ -34,7 +40,7 @@ class EpisodeStats(BaseCallback):
     def _on_step(self) -> bool:
         infos, dones = self.locals["infos"], self.locals["dones"]
         self.returns += self.locals["rewards"]
-        self.touched += [i["intervention"] > 1e-6 * self.u_max for i in infos]
+        self.touched += intervened([i["intervention"] for i in infos], self.u_max)
         for k in np.flatnonzero(dones):
             if k % self.n:
                 continue
@@ -102,8 +108,7 @@ class Validation(BaseCallback):
             if new:
                 writer.writeheader()
             writer.writerow(row)
-        time_key = -stats["completion_time"] if stats["success_rate"] > 0 else -np.inf
-        score = (stats["success_rate"], time_key)
+        score = validation_score(stats)
         if self.best is None or score > self.best:
             self.best = score
             self.model.save(self.out / "best_model.zip")

@@ -108,9 +108,6 @@ def make_env(
 ) -> BatchedEnv:
     """The filtered batched env a config describes (``action``/``weighting``: another choice,
     e.g. ``action="direct"`` for the scripted controller under the same protocol)."""
-    env_kwargs = {**cfg["env"], **env_overrides}
-    if "theta_range" in env_kwargs and env_kwargs["theta_range"] is not None:
-        env_kwargs["theta_range"] = tuple(env_kwargs["theta_range"])
     return BatchedEnv(
         cfg["scenario"],
         num_envs=num_envs,
@@ -119,7 +116,7 @@ def make_env(
         residual_right_hand=cfg.get("residual_right_hand", True),
         residual_scale=cfg.get("residual_scale", 1.0),
         weighting=weighting or cfg["weighting"],
-        **env_kwargs,
+        **{**cfg["env"], **env_overrides},
     )
 
 
@@ -135,11 +132,8 @@ def make_parallel(
     from wrappers import ResidualAction
     from wrappers.safety_filter import filtered_parallel_env
 
-    env_kwargs = dict(cfg["env"])
-    if env_kwargs.get("theta_range") is not None:
-        env_kwargs["theta_range"] = tuple(env_kwargs["theta_range"])
     env = filtered_parallel_env(
-        cfg["scenario"], render_mode=render_mode, weighting=cfg["weighting"], **env_kwargs
+        cfg["scenario"], render_mode=render_mode, weighting=cfg["weighting"], **cfg["env"]
     )
     if (action or cfg["action"]) == "residual":
         env = ResidualAction(

@@ -23,6 +23,17 @@ FIELDS = (
 )  # fmt: skip
 
 
+def intervened(intervention: Any, u_max: float) -> Any:
+    """Whether the filter changed a command: by more than 1e-6 of the speed limit."""
+    return np.asarray(intervention) > 1e-6 * u_max
+
+
+def validation_score(stats: dict[str, float]) -> tuple[float, float]:
+    """How validations rank (higher is better): success rate, then a shorter completion."""
+    fastest = -stats["completion_time"] if stats["success_rate"] > 0 else -np.inf
+    return stats["success_rate"], fastest
+
+
 def model_policy(model: Any) -> Policy:
     """A Stable-Baselines3 model's deterministic action for every agent (parameter sharing)."""
 
@@ -59,8 +70,7 @@ def run_episodes(
         live = ~finished
         returns[live] += reward[live]
         effort[live] += info["intervention"][live]
-        # an intervention counts when it moves the command by more than 1e-6 of the speed limit
-        touched[live] += info["intervention"][live] > 1e-6 * u_max
+        touched[live] += intervened(info["intervention"][live], u_max)
         ended = info["_final_obs"] & live
         if ended.any():
             steps = info["episode_steps"][ended]

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from training import config as configs
-from training.evaluation import run_episodes, summarize
+from training.evaluation import run_episodes, summarize, validation_score
 
 SHARED = "shared"
 
@@ -126,7 +126,7 @@ def train_rllib(
                 break
             result = algo.train()
             steps = agent_steps(result)
-            row = log.iteration(result, steps, time.perf_counter() - start, cfg)
+            log.iteration(result, steps, time.perf_counter() - start, cfg)
             if val["every"] and steps >= next_val:
                 next_val += val["every"]
                 stats = validate(algo, cfg)
@@ -135,7 +135,6 @@ def train_rllib(
             if cfg["checkpoint_every"] and steps >= next_ckpt:
                 next_ckpt += cfg["checkpoint_every"]
                 algo.save_to_path(str(out / "checkpoints" / f"step_{steps}"))
-            del row
         seconds = time.perf_counter() - start
         algo.save_to_path(str(out / "checkpoint"))
         final = validate(algo, cfg)
@@ -174,8 +173,7 @@ def keep_best(
     algo: Any, stats: dict[str, float], best: tuple[float, float] | None, out: Path
 ) -> tuple[float, float]:
     """Save ``best_checkpoint/`` when the validation (success, then completion) improves."""
-    time_key = -stats["completion_time"] if stats["success_rate"] > 0 else -np.inf
-    score = (stats["success_rate"], time_key)
+    score = validation_score(stats)
     if best is None or score > best:
         algo.save_to_path(str(out / "best_checkpoint"))
         return score
@@ -202,21 +200,20 @@ class Log:
         except ImportError:
             self.tb = None
 
-    def write(self, row: dict[str, Any]) -> dict[str, Any]:
+    def write(self, row: dict[str, Any]) -> None:
         self.writer.writerow(row)
         self.file.flush()
         if self.tb is not None:
             for key, value in row.items():
                 if key != "agent_steps" and value is not None and np.isfinite(value):
                     self.tb.add_scalar(key, value, row["agent_steps"])
-        return row
 
-    def iteration(self, result: dict, steps: int, seconds: float, cfg: dict) -> dict[str, Any]:
+    def iteration(self, result: dict, steps: int, seconds: float, cfg: dict) -> None:
         runners = result["env_runners"]
         rsvo = runners.get("rsvo", {})
         dt = float(cfg["env"].get("dt", 0.01))
         completion = rsvo.get("completion_steps")
-        return self.write(
+        self.write(
             {
                 "agent_steps": steps,
                 "seconds": round(seconds, 2),
