@@ -24,8 +24,8 @@ from numpy.typing import NDArray
 from rsvo_env import dynamics, observation, planar
 from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_neighbors
-from rsvo_env.pairs import weight_floor
-from rsvo_env.responsibility import Weighting, smallest_weight, weight_matrix
+from rsvo_env.pairs import Floor, theta_floor, weight_floor
+from rsvo_env.responsibility import Weighting, check_weighting, smallest_weight, weight_matrix
 from rsvo_env.safety import FilterResult, SafetyFilter, merge_stats
 from rsvo_env.scenarios import Scenario
 from rsvo_env.state import State
@@ -69,7 +69,7 @@ class Simulator:
             or not 0 <= num_obs_neighbors < n
         ):
             raise ValueError(f"num_obs_neighbors = {num_obs_neighbors!r} must be in [0, {n - 1}]")
-        weight_matrix(np.ones(n), weighting)  # validates the mode now, not at the first reset
+        check_weighting(weighting, np.ones(n))  # now, not at the first reset
         self.scenario, self.num_envs, self.n = scenario, int(num_envs), n
         self.k = int(num_obs_neighbors)
         self.frame, self.weighting = frame, weighting
@@ -104,7 +104,7 @@ class Simulator:
         # bumped whenever a weight matrix changes (reset, theta, weighting)
         self._omega_version = 0
         self._floor_version = -1
-        self._floor_cache: tuple[NDArray, NDArray] | None = None
+        self._floor_cache: Floor | None = None
         self.rngs: list[np.random.Generator | None] = [None] * self.num_envs
         self.state = State.empty(self.num_envs, n, self.k)
         self.metrics = EpisodeMetrics(
@@ -174,7 +174,7 @@ class Simulator:
             checked = [self.scenario.check_theta(r) for r in rows]
             theta = np.broadcast_to(np.stack(checked), (self.num_envs, self.n))
         weighting = options.get("weighting", self.weighting)
-        weight_matrix(np.ones(self.n) if theta is None else theta[0], weighting)
+        check_weighting(weighting, np.ones(self.n) if theta is None else theta[0])
         return theta, weighting
 
     def reset(
@@ -275,13 +275,19 @@ class Simulator:
         return self.scenario.nominal(self.state)
 
     # ---- the step ---------------------------------------------------------------------------
-    def _floor(self) -> tuple[NDArray, NDArray] | None:
-        """The weights' floor for the large-N pair search, computed once per weight matrix."""
+    def _floor(self) -> Floor | None:
+        """The weights' floor for the large-N pair search, computed once per weight matrix:
+        per score group when every env has the same named weighting."""
         if self.n <= DENSE_MAX_AGENTS:
             return None
         # the core is the one writer of omega, and bumps the version on every write
         if self._floor_version != self._omega_version:
-            self._floor_cache = weight_floor(self.state.omega)
+            modes = set(map(str, self.state.weighting))
+            mode = self.state.weighting[0]
+            floor = None
+            if len(modes) == 1 and isinstance(mode, str):
+                floor = theta_floor(self.state.theta, mode)
+            self._floor_cache = weight_floor(self.state.omega) if floor is None else floor
             self._floor_version = self._omega_version
         return self._floor_cache
 

@@ -7,6 +7,7 @@ stage through :meth:`RSVOParallelEnv.add_safety_filter`.
 
 from __future__ import annotations
 
+from collections import deque
 from typing import Any
 
 import gymnasium
@@ -18,8 +19,8 @@ from pettingzoo.utils import BaseWrapper
 
 from rsvo_env.factory import make_simulator
 from rsvo_env.metrics import FLAT_FIELDS, EpisodeMetrics
-from rsvo_env.rendering import Renderer
-from rsvo_env.responsibility import Weighting, weight_matrix
+from rsvo_env.rendering import TRAIL, Renderer
+from rsvo_env.responsibility import Weighting, check_weighting
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario
 from rsvo_env.state import World
@@ -69,11 +70,16 @@ class RSVOParallelEnv(ParallelEnv):
         scenario: str | Scenario = "circular_swap",
         render_mode: str | None = None,
         render_size: int = 600,
+        keep_history: bool = False,
         **kwargs: Any,
     ) -> None:
-        """``kwargs``: ``num_obs_neighbors``, ``frame``, ``weighting``, ``reward_progress``,
-        ``reward_time``, ``reward_goal``, ``reward_team``, ``max_cycles``, and every scenario
-        parameter."""
+        """``keep_history``: keep every step's positions in ``history`` (the whole trajectory);
+        by default only the last ``TRAIL`` steps the renderer draws, so memory does not grow with
+        the episode. ``kwargs``: ``num_obs_neighbors``, ``frame``, ``weighting``,
+        ``reward_progress``, ``reward_time``, ``reward_goal``, ``reward_team``, ``max_cycles``,
+        and every scenario parameter."""
+        if not isinstance(keep_history, (bool, np.bool_)):
+            raise ValueError(f"keep_history = {keep_history!r} must be True or False")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode = {render_mode!r}; use one of {self.metadata['render_modes']}"
@@ -90,7 +96,7 @@ class RSVOParallelEnv(ParallelEnv):
         obs_space, act_space = self.sim.spaces()
         self.observation_spaces = {a: obs_space for a in self.possible_agents}
         self.action_spaces = {a: act_space for a in self.possible_agents}
-        self.history: list[NDArray[np.float64]] = []
+        self.history: deque[NDArray[np.float64]] = deque(maxlen=None if keep_history else TRAIL)
         self.renderer: Renderer | None = None
         self.episode_metrics: dict[str, Any] | None = None
         self._started = False
@@ -118,7 +124,7 @@ class RSVOParallelEnv(ParallelEnv):
 
     def set_weighting(self, mode: Weighting) -> None:
         """Weighting of this and later episodes (a reset option still overrides it once)."""
-        weight_matrix(np.ones(self.sim.n), mode)
+        check_weighting(mode, np.ones(self.sim.n))
         self.sim.weighting = mode
         if self._started:
             self.sim.set_weighting(0, mode)
@@ -148,7 +154,8 @@ class RSVOParallelEnv(ParallelEnv):
         self.sim.reset([0], [seed], theta, weighting)
         self._started = True
         self.agents = list(self.possible_agents)
-        self.history = [self.sim.state.positions[0].copy()]
+        self.history.clear()
+        self.history.append(self.sim.state.positions[0].copy())
         obs = self._obs_dict(self.sim.observe())
         infos = self._infos(self.sim.signals())
         if self.render_mode == "human":

@@ -12,6 +12,8 @@ from numba import njit
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from rsvo_env import grid
+
 # Below this many agents all pairs are cheaper than a KD-tree.
 DENSE_MAX_AGENTS = 64
 
@@ -95,6 +97,7 @@ def nearest_neighbors(
 
 def nearest_distance(positions: NDArray[np.float64]) -> NDArray[np.float64]:
     """Distance (..., N) from each agent to its nearest neighbour (inf for a lone agent)."""
-    if positions.shape[-2] < 2:
+    n = positions.shape[-2]
+    if n < 2:
         return np.full(positions.shape[:-1], np.inf)
-    return nearest_neighbors(positions, 1)[0][..., 0]
+    return grid.nearest_distance(positions.reshape(-1, n, 2)).reshape(positions.shape[:-1])

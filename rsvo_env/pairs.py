@@ -13,7 +13,17 @@ from numba import njit
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from rsvo_env import grid
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, env_offsets
+from rsvo_env.responsibility import pair_omega
+
+# (floor (E, N, K), group (E, N), required pairs (P, 2)): see weight_floor and theta_floor
+Floor = tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]
+
+# Groups of scores the large-N pair search keeps apart (theta_floor): at most this many, each
+# spanning at least a factor GROUP_RATIO.
+THETA_GROUPS = 12
+GROUP_RATIO = 1.25
 
 
 def sensing_radius(
@@ -45,37 +55,117 @@ def agent_radii(
     return np.where(wg > 0, r, 0.0)
 
 
-def weight_floor(omega: NDArray) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """For weight matrices (E, N, N): each agent's smallest positive weight (E, N) (inf when it
-    has none), and the pairs (P, 2), flat indices ``e * N + i`` with i < j, in which either side
-    has weight 0: such a row binds at any distance, so no radius may drop it."""
+def double_integrator_radii(
+    omega_floor: NDArray,
+    velocities: NDArray,
+    gamma: float,
+    safety_radius: float,
+    lo: NDArray,
+    hi: NDArray,
+    barrier: str = "braking",
+    gamma2: float | None = None,
+    dt: float | None = None,
+) -> NDArray[np.float64]:
+    """Per agent and weight floor (E, N, K), the distance beyond which none of its
+    double-integrator rows with a positive weight can bind in the current state
+    (``docs/double_integrator.md``).
+
+    A row ``-c dp.a_i <= s_ij`` cannot bind when ``s_ij >= c |dp| U`` (``U`` the box's largest
+    speed-change vector). Beyond the radius RHS > 0, where every split gives ``s_ij = omega
+    RHS``, and RHS is bounded below with the closing speed ``-q <= V = |v_i| + max_j |v_j|``:
+    braking, closing: ``RHS >= |dp| (-A + gamma A (|dp| - Ds - V^2 / (2A)) / V)``; braking with
+    ``dt``, opening: ``RHS >= 2 gamma |dp| (|dp| - Ds) / dt``; hocbf:
+    ``RHS >= g1 g2 (|dp|^2 - Ds^2) - 2 (g1 + g2) |dp| V``.
+    """
+    U = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
+    speed = np.linalg.norm(velocities, axis=-1)
+    V = (speed + speed.max(axis=-1, keepdims=True))[..., None]
+    ok = np.isfinite(omega_floor)
+    w = np.where(ok, omega_floor, 1.0)
+    if barrier == "braking":
+        A = 2.0 * float(np.min(np.minimum(-lo, hi)))
+        r = safety_radius + V * V / (2.0 * A) + V * (U / w + A) / (gamma * A)
+        if dt is not None:
+            r = np.maximum(r, safety_radius + U * dt / (2.0 * gamma * w))
+    else:
+        g2 = gamma if gamma2 is None else gamma2
+        a = w * gamma * g2
+        B = 2.0 * w * (gamma + g2) * V + 2.0 * U
+        r = (B + np.sqrt(B * B + 4.0 * a * a * safety_radius**2)) / (2.0 * a)
+    # the bounds are tight only in exact arithmetic; a pair right at the radius stays examined
+    return np.where(ok, r * (1.0 + 1e-9), 0.0)
+
+
+def weight_floor(omega: NDArray) -> Floor:
+    """For weight matrices (E, N, N): each agent's smallest positive weight (E, N, 1) (inf when
+    it has none), one group of all agents (E, N), and the pairs (P, 2), flat indices
+    ``e * N + i`` with i < j, in which either side has weight 0: such a row binds at any
+    distance, so no radius may drop it."""
     E, n = omega.shape[:2]
     off = ~np.eye(n, dtype=bool)
     floor = np.where(off & (omega > 0), omega, np.inf).min(axis=-1)
     zero = off & ((omega == 0) | (np.swapaxes(omega, -1, -2) == 0)) & np.triu(off)
     e, i, j = np.nonzero(zero)
-    return floor, np.stack([e * n + i, e * n + j], axis=1).astype(np.int64)
+    required = np.stack([e * n + i, e * n + j], axis=1).astype(np.int64)
+    return floor[..., None], np.zeros((E, n), dtype=np.int64), required
+
+
+def theta_floor(theta: NDArray, mode: str) -> Floor | None:
+    """:func:`weight_floor` of a named weighting from the scores (E, N) alone, in O(N) time and
+    memory, and finer: the agents fall into up to ``THETA_GROUPS`` groups, geometric bins of
+    the scores, and agent i gets its smallest positive weight against each group (E, N, K).
+    The weight of i against j grows with theta_j, so that is the weight against the group's
+    smallest positive score; a zero weight arises exactly between a theta = 0 agent and a
+    positive one. Floors are lowered by 1e-12 (relative) to cover the rounding of the
+    matrix's ``1 - W.T`` half, which only widens the search. None when the ratio of scores
+    is so large that rounding may zero a weight (then use the matrix)."""
+    E, n = theta.shape
+    none = np.zeros((0, 2), dtype=np.int64)
+    if mode == "symmetric" or n < 2:
+        floor = np.full((E, n, 1), 0.5 if n > 1 else np.inf)
+        return floor, np.zeros((E, n), dtype=np.int64), none
+    pos = np.where(theta > 0, theta, np.inf)
+    if np.any(np.isfinite(pos).any(axis=1) & (theta.max(axis=1) > 1e6 * pos.min(axis=1))):
+        return None
+    # geometric bins of the positive scores (zeros join the lowest): one bin when they are
+    # within a factor GROUP_RATIO, more as they spread, since a bin's floor is set by its lowest
+    lo_pos = np.where(np.isfinite(pos).any(axis=1), pos.min(axis=1), 1.0)[:, None]
+    spread = float(np.log(np.max(np.where(theta > 0, theta, lo_pos) / lo_pos)))
+    K = int(min(THETA_GROUPS, max(1, np.ceil(spread / np.log(GROUP_RATIO)))))
+    width = max(spread / K, 1e-300)
+    rel = np.log(np.where(theta > 0, theta, lo_pos) / lo_pos)
+    group = np.minimum((rel / width).astype(np.int64), K - 1)
+    member = group[..., None] == np.arange(K)  # (E, N, K)
+    low_pos = np.where(member, pos[..., None], np.inf).min(axis=1)  # (E, K)
+    low = np.where(member, theta[..., None], np.inf).min(axis=1)
+    ti = theta[..., None]
+    vs_pos = pair_omega(ti, np.where(np.isfinite(low_pos), low_pos, 1.0)[:, None, :])
+    w = np.where(
+        ti > 0,
+        np.where(np.isfinite(low_pos)[:, None, :], vs_pos, np.inf),
+        np.where(np.isfinite(low)[:, None, :], pair_omega(ti, low[:, None, :]), np.inf),
+    )
+    floor = np.where(np.isfinite(w), w * (1.0 - 1e-12), np.inf)
+    e, i = np.nonzero(theta == 0)
+    if len(e) == 0:
+        return floor, group, none
+    # every (theta = 0, theta > 0) pair of an env
+    e2, j = np.nonzero(theta[e] > 0)
+    a, b = e[e2] * n + i[e2], e[e2] * n + j
+    return floor, group, np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1).astype(np.int64)
 
 
 def pairs_within_agent_radii(
-    positions: NDArray, radius: NDArray, required: NDArray | None = None
+    positions: NDArray, radius: NDArray, floor: Floor
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Pairs (I < J, flat indices) of agents of the same env closer than the larger of their
-    two radii (E, N), plus the ``required`` pairs (P, 2), sorted: the all-pairs order, kept."""
-    E, n = positions.shape[:2]
-    r = radius.reshape(-1)
-    shifted = (positions + env_offsets(positions, float(r.max(initial=0.0)))).reshape(-1, 2)
-    hits = cKDTree(shifted).query_ball_point(shifted, r=r, return_sorted=False)
-    counts = np.fromiter((len(h) for h in hits), dtype=np.int64, count=len(hits))
-    src = np.repeat(np.arange(E * n, dtype=np.int64), counts)
-    dst = np.fromiter((k for h in hits for k in h), dtype=np.int64, count=int(counts.sum()))
-    pairs = np.stack([np.minimum(src, dst), np.maximum(src, dst)], axis=1)[src != dst]
-    if required is not None and len(required):
-        pairs = np.concatenate([pairs, required])
-    if len(pairs) == 0:
-        empty = np.zeros(0, dtype=np.int64)
-        return empty, empty
-    pairs = np.unique(pairs, axis=0)  # sorted by (I, J)
+    radii against each other's group (``radius`` (E, N, K) from ``floor``), plus the floor's
+    required pairs, sorted: the all-pairs order, kept."""
+    I, J = grid.pairs_within_radii(positions, radius, floor[1])
+    required = floor[2]
+    if len(required) == 0:
+        return I, J
+    pairs = np.unique(np.concatenate([np.stack([I, J], axis=1), required]), axis=0)
     return pairs[:, 0], pairs[:, 1]
 
 

@@ -11,6 +11,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+# Steps of trajectory drawn behind each agent (and all an env keeps by default).
+TRAIL = 400
 EGOIST = np.array([220, 60, 40])
 ALTRUIST = np.array([40, 90, 220])
 BACKGROUND = (250, 250, 248)
@@ -46,7 +48,7 @@ class Renderer:
         mode: str,
         size: int = 600,
         fps: int = 50,
-        trail: int = 400,
+        trail: int = TRAIL,
         lanes: Sequence[NDArray] = (),
         caption: str = "",
     ) -> None:
@@ -105,7 +107,7 @@ class Renderer:
         colors = theta_colors(theta)
         r_px = max(2, int(round(0.5 * safety_radius * self.scale)))
         if len(history) > 1:
-            trail = self.to_screen(np.stack(history[-self.trail :]))
+            trail = self.to_screen(np.stack(list(history)[-self.trail :]))
             for i in range(positions.shape[0]):
                 pg.draw.lines(surf, tuple(int(c) for c in colors[i]), False, trail[:, i], 1)
         for i, g in enumerate(self.to_screen(goals)):

@@ -85,16 +85,39 @@ def weight_matrix(theta: ArrayLike, mode: Weighting = "asymmetric") -> NDArray[n
     return _string_weights(th, mode)
 
 
+# Rows of a weight matrix computed at once: bounds the temporaries to about 32 MB.
+BLOCK_ENTRIES = 1 << 22
+
+
+def check_weighting(mode: Weighting, theta: ArrayLike) -> None:
+    """Refuse an unknown mode, or a callable whose matrix for ``theta`` (N,) is not a valid
+    weight matrix, without building a matrix for a named mode."""
+    if callable(mode):
+        weight_matrix(theta, mode)
+    elif not isinstance(mode, str) or mode not in WEIGHTING_MODES:
+        raise ValueError(
+            f"weighting mode {mode!r} is unknown; use one of {WEIGHTING_MODES} or a callable"
+        )
+
+
 def _string_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
-    """Weights of a named mode for validated scores (..., N)."""
+    """Weights of a named mode for validated scores (..., N), a block of rows at a time so a
+    crowd of 10,000 needs the matrix and no N x N temporaries."""
     n = th.shape[-1]
     if mode == "symmetric":
         w = np.full((*th.shape, n), 0.5)
     elif mode == "asymmetric":
-        w = pair_omega(th[..., :, None], th[..., None, :])
-        upper = np.triu(np.ones((n, n), dtype=bool), 1)
-        lower = np.swapaxes(w, -1, -2)
-        lower[..., upper] = 1.0 - w[..., upper]
+        w = np.empty((*th.shape, n))
+        step = max(1, BLOCK_ENTRIES // max(n, 1))
+        for a in range(0, n, step):
+            w[..., a : a + step, :] = pair_omega(th[..., a : a + step, None], th[..., None, :])
+        # the lower triangle is 1 - W.T, so each pair's weights sum to 1 to one rounding
+        for a in range(0, n, step):
+            b = min(a + step, n)
+            w[..., a:b, :a] = 1.0 - np.swapaxes(w[..., :a, a:b], -1, -2)
+            block = w[..., a:b, a:b]
+            low = np.tril(np.ones((b - a, b - a), dtype=bool), -1)
+            block[..., low] = 1.0 - np.swapaxes(block, -1, -2)[..., low]
     else:
         raise ValueError(
             f"weighting mode {mode!r} is unknown; use one of {WEIGHTING_MODES} or a callable"
@@ -157,11 +180,16 @@ def min_pair_weight(theta: NDArray[np.float64], mode: Weighting) -> float:
 
 
 def smallest_weight(omega: NDArray[np.float64]) -> NDArray[np.float64] | float:
-    """Smallest off-diagonal omega of each (N, N) matrix of (..., N, N); 0.5 for one agent."""
+    """Smallest off-diagonal omega of each (N, N) matrix of (..., N, N); 0.5 for one agent.
+    A block of rows at a time, so no copy of the matrix is made."""
     n = omega.shape[-1]
     if n < 2:
         return np.full(omega.shape[:-2], 0.5) if omega.ndim > 2 else 0.5
-    w = omega.copy()
-    d = np.arange(n)
-    w[..., d, d] = np.inf
-    return w.min(axis=(-2, -1))
+    out = np.full(omega.shape[:-2], np.inf)
+    step = max(1, BLOCK_ENTRIES // n)
+    for a in range(0, n, step):
+        block = omega[..., a : a + step, :].copy()
+        rows = np.arange(block.shape[-2])
+        block[..., rows, a + rows] = np.inf
+        out = np.minimum(out, block.min(axis=(-2, -1)))
+    return out if omega.ndim > 2 else float(out)

@@ -77,6 +77,7 @@ class SafetyFilter:
         if config is not None and kwargs:
             raise TypeError("pass either a FilterConfig or keyword arguments, not both")
         self.config = config if config is not None else FilterConfig(**kwargs)  # type: ignore[arg-type]
+        self._last_floor: tuple[NDArray, pairs.Floor] | None = None
 
     def pair_radius(
         self, theta: NDArray, omega: NDArray | None, omega_min: NDArray | None = None
@@ -180,7 +181,7 @@ class SafetyFilter:
         with_rows: bool = False,
         omega_min: NDArray[np.float64] | None = None,
         nearest: NDArray[np.float64] | None = None,
-        floor: tuple[NDArray, NDArray] | None = None,
+        floor: pairs.Floor | None = None,
     ) -> FilterResult:
         """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
 
@@ -189,9 +190,10 @@ class SafetyFilter:
         (``solvers.dense``, the same arithmetic) unless ``with_rows`` asks for the rows. A caller
         that keeps them passes each scene's smallest weight ``omega_min`` (E,), each agent's
         nearest distance ``nearest`` (E, N) and ``floor``, :func:`pairs.weight_floor` of the
-        weights, which the large-N path needs. There, each single-integrator agent examines its
-        neighbours within its own radius (:func:`pairs.agent_radii`): exact culling, so the
-        rows kept, and the solution, are those of all pairs.
+        weights, which the large-N path needs. There, each agent examines its neighbours within
+        its own radius (:func:`pairs.agent_radii`, :func:`pairs.double_integrator_radii` from
+        the current velocities): exact culling, so the rows kept, and the solution, are those
+        of all pairs.
         """
         cfg = self.config
         E, n = theta.shape
@@ -199,15 +201,29 @@ class SafetyFilter:
         dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
         if dense and not with_rows and cfg.solver == "exact" and cfg.dynamics == DYNAMICS[0]:
             return self._apply_dense(positions, nominal, theta, omega)
+        reach = None
         if dense:
             # Few agents: every pair, and exact culling drops the rows that cannot bind.
             I, J = pairs.all_pairs(n, E)
-        elif cfg.dynamics == DYNAMICS[0] and cfg.neighbor_radius is None:
+        elif cfg.neighbor_radius is None:
             if floor is None:
-                W = weight_matrix(theta, cfg.weighting) if omega is None else omega
-                floor = pairs.weight_floor(W)
-            radii = pairs.agent_radii(floor[0], cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
-            I, J = pairs.pairs_within_agent_radii(positions, radii, floor[1])
+                floor = self._floor(theta, omega)
+            if cfg.dynamics == DYNAMICS[0]:
+                radii = pairs.agent_radii(floor[0], cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+            else:
+                radii = pairs.double_integrator_radii(
+                    floor[0],
+                    velocities,
+                    cfg.gamma,
+                    cfg.safety_radius,
+                    cfg.lo,
+                    cfg.hi,
+                    cfg.barrier,
+                    cfg.gamma2,
+                    cfg.dt,
+                )
+            I, J = pairs.pairs_within_agent_radii(positions, radii, floor)
+            reach = np.where(radii > 0, radii, np.inf).min(axis=(1, 2))
         else:
             radius = self.pair_radius(theta, omega, omega_min)
             I, J = pairs.candidate_pairs(positions, radius)
@@ -241,13 +257,28 @@ class SafetyFilter:
             feasible=feasible.reshape(E, n),
             intervention=norm(actions - nom).reshape(E, n),
             active=active.reshape(E, n),
-            min_h=self._min_h(rows, positions, I, dense, nearest),
+            min_h=self._min_h(rows, positions, I, dense, nearest, reach),
             max_violation=violation.reshape(E, n),
             n_rows=rows.mask.sum(axis=-1).reshape(E, n),
             n_unrecoverable_pairs=rows.unrecoverable.reshape(E, -1).sum(axis=-1) // 2,
             n_capped_shares=rows.capped.reshape(E, -1).sum(axis=-1),
             rows=rows,
         )
+
+    def _floor(self, theta: NDArray, omega: NDArray | None) -> pairs.Floor:
+        """:func:`pairs.weight_floor` of the weights in force, from the scores alone (O(N)
+        memory) for a named weighting."""
+        mode = self.config.weighting
+        if omega is None and not callable(mode):
+            # a simulator calls with the same scores step after step: keep the last floor
+            last = self._last_floor
+            if last is not None and np.array_equal(last[0], theta):
+                return last[1]
+            floor = pairs.theta_floor(theta, mode)
+            if floor is not None:
+                self._last_floor = (theta.copy(), floor)
+                return floor
+        return pairs.weight_floor(weight_matrix(theta, mode) if omega is None else omega)
 
     def _apply_dense(
         self, positions: NDArray, nominal: NDArray, theta: NDArray, omega: NDArray | None
@@ -281,20 +312,29 @@ class SafetyFilter:
         I: NDArray,
         dense: bool,
         nearest: NDArray | None = None,
+        reach: NDArray | None = None,
     ) -> NDArray[np.float64]:
         """(E,) smallest barrier value of each scene over the pairs examined; for the single
         integrator beyond the dense size, over all pairs (the nearest pair may lie outside the
-        pair search)."""
+        pair search). ``reach`` (E,): the smallest positive search radius of each scene; every
+        pair closer than it was examined, so a closer examined pair is the scene's nearest."""
         E, n = positions.shape[:2]
         if dense:
             if n < 2:
                 return np.full(E, np.inf)
             return rows.pair_h.reshape(E, -1).min(axis=-1)
         out = np.full(E, np.inf)
-        np.minimum.at(out, I // n, rows.pair_h)
+        if len(I):
+            # pairs come sorted by I, so each env's pairs are one run
+            env = I // n
+            starts = np.flatnonzero(np.r_[True, env[1:] != env[:-1]])
+            out[env[starts]] = np.minimum.reduceat(rows.pair_h, starts)
         if self.config.dynamics == "single_integrator":
+            R2 = self.config.safety_radius**2
+            if nearest is None and reach is not None and np.all(out <= reach**2 - R2):
+                return out
             d = (nearest_distance(positions) if nearest is None else nearest).min(axis=-1)
-            out = np.minimum(out, d**2 - self.config.safety_radius**2)
+            out = np.minimum(out, d**2 - R2)
         return out
 
 

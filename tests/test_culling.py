@@ -5,7 +5,7 @@ and the actions are those of the all-pairs filter."""
 import numpy as np
 import pytest
 
-from rsvo_env import barriers, pairs
+from rsvo_env import barriers, grid, pairs
 from rsvo_env.safety import FilterConfig, SafetyFilter
 from rsvo_env.scenarios import Crowd
 from rsvo_env.solvers import exact
@@ -55,6 +55,119 @@ def test_personalities_do_not_blow_up_the_pair_search():
     assert global_radius_pairs(one_zero, x) == n * (n - 1) // 2
     assert pairs_examined(one_zero, x) <= equal + (n - 1)
     # theta spread over 1..10: an altruist facing an egoist (omega ~ 0.02) can truly be bound
-    # ~28 m away, but only the altruists search that far
+    # ~28 m away, but only the altruists search that far, and only for the egoists
     spread = np.random.default_rng(7).uniform(1, 10, n)
-    assert pairs_examined(spread, x) <= 0.5 * global_radius_pairs(spread, x)
+    examined = pairs_examined(spread, x)
+    assert examined <= 0.1 * global_radius_pairs(spread, x)
+    # No exact culling that looks at the state alone can examine fewer pairs than those with a
+    # row that binds somewhere in the box; the search stays within 2x of that floor.
+    assert examined <= 2.0 * pairs_that_can_bind(spread, x)
+    assert pairs_that_can_bind(spread, x) > 3 * pairs_that_can_bind(np.ones(n), x)
+
+
+def pairs_that_can_bind(theta, x):
+    """Pairs (of all) with a row that binds for some action in the box, at these positions."""
+    I, J = pairs.all_pairs(len(x))
+    d = x[I] - x[J]
+    h = (d**2).sum(axis=1) - 1.0
+    w = pairs.pair_omega(theta[I], theta[J])
+    return int((np.minimum(w, 1 - w) * 10.0 * h < 2 * 2.0 * np.abs(d).sum(axis=1)).sum())
+
+
+def brute_pairs(x, radius, group):
+    """Pairs (flat, sorted) closer than the larger of their radii against each other's group;
+    a radius of 0 searches nothing."""
+    E, n = x.shape[:2]
+    out = []
+    for e in range(E):
+        for i in range(n):
+            for j in range(i + 1, n):
+                d2 = ((x[e, i] - x[e, j]) ** 2).sum()
+                r = (radius[e, i, group[e, j]], radius[e, j, group[e, i]])
+                if any(ri > 0 and d2 <= np.float64(ri) * ri for ri in r):
+                    out.append((e * n + i, e * n + j))
+    return np.array(out, dtype=np.int64).reshape(-1, 2)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_grid_search_equals_brute_force(seed):
+    rng = np.random.default_rng(seed)
+    E, n, K = int(rng.integers(1, 4)), int(rng.integers(2, 90)), int(rng.integers(1, 4))
+    scale = 10.0 ** rng.uniform(-3, 3)
+    x = rng.uniform(-1, 1, (E, n, 2)) * scale
+    x[:, 1] = x[:, 0]  # coincident agents
+    if seed % 2:
+        x[..., 1] = 0.0  # all on a line: a degenerate box
+    radius = rng.uniform(0, 0.6, (E, n, K)) * scale
+    radius[rng.uniform(size=(E, n, K)) < 0.2] = 0.0
+    radius[0, 0, 0] = 1e300  # one agent that searches everywhere
+    group = rng.integers(0, K, (E, n))
+    I, J = grid.pairs_within_radii(x, radius, group)
+    with np.errstate(over="ignore"):
+        np.testing.assert_array_equal(np.stack([I, J], axis=1), brute_pairs(x, radius, group))
+    d = np.linalg.norm(x[:, :, None] - x[:, None], axis=-1) + np.where(np.eye(n), np.inf, 0)
+    np.testing.assert_array_equal(grid.nearest_distance(x), d.min(axis=-1))
+
+
+def all_pairs_double_integrator(flt, x, v, nominal, theta):
+    cfg = flt.config
+    I, J = pairs.all_pairs(len(x))
+    w = flt.pair_weights(theta, None, I, J)
+    rows = barriers.double_integrator_rows(
+        x,
+        v,
+        w,
+        I,
+        J,
+        cfg.gamma,
+        cfg.safety_radius,
+        cfg.lo,
+        cfg.hi,
+        cfg.barrier,
+        cfg.split,
+        cfg.gamma2,
+        cfg.dt,
+    )
+    return exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)
+
+
+@pytest.mark.parametrize(
+    "n,seed,barrier,dt",
+    [
+        (100, 0, "braking", None),
+        (300, 1, "braking", 0.05),
+        (1000, 2, "hocbf", None),
+        (2000, 3, "braking", 0.01),
+    ],
+)
+def test_double_integrator_culled_equals_all_pairs(n, seed, barrier, dt):
+    """No user radius: each agent's radius from the closing speeds and the acceleration box."""
+    rng = np.random.default_rng(seed)
+    x = crowd(n, seed) * 2.0
+    v = rng.normal(0, 1.0, (n, 2))
+    theta = 10.0 ** rng.uniform(0, 2, n)
+    theta[rng.choice(n, 3, replace=False)] = 0.0
+    nominal = rng.uniform(-1, 1, (n, 2))
+    cfg = FilterConfig(
+        gamma=1.0,
+        safety_radius=1.0,
+        u_max=1.0,
+        dt=dt,
+        dynamics="double_integrator",
+        barrier=barrier,
+    )
+    flt = SafetyFilter(cfg)
+    res = flt.filter(x, nominal, theta, velocities=v)
+    ref, feasible = all_pairs_double_integrator(flt, x, v, nominal, theta)[:2]
+    np.testing.assert_allclose(res.actions, ref, atol=1e-12)
+    np.testing.assert_array_equal(res.feasible, feasible)
+
+
+def test_double_integrator_crowd_examines_few_pairs():
+    n = 2000
+    rng = np.random.default_rng(0)
+    x = Crowd(num_agents=n)._spread(rng)
+    v = rng.normal(0, 0.5, (n, 2))
+    cfg = FilterConfig(gamma=1.0, u_max=1.0, dt=0.05, dynamics="double_integrator")
+    examined = SafetyFilter(cfg).filter(x, np.zeros((n, 2)), np.ones(n), velocities=v).rows.n_pairs
+    assert examined < 0.05 * n * (n - 1) / 2

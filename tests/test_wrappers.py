@@ -117,7 +117,7 @@ def test_infeasible_steps_apply_least_violation_and_are_counted():
 
 def distance_before_meeting(weighting):
     """Path length of each agent up to the first step the right-hand rule fires."""
-    env = wrappers.ResponsibilityWeighting(filtered("position_swap"), weighting)
+    env = wrappers.ResponsibilityWeighting(filtered("position_swap", keep_history=True), weighting)
     env.reset(seed=0, options={"theta": [1.0, 4.0]})
     base = env.unwrapped
     while env.agents and base.metrics.deadlock_onset is None:

@@ -41,6 +41,7 @@ def run(
         render_mode="rgb_array" if gif else None,
         weighting=weighting,
         render_size=render_size,
+        keep_history=True,
         **kwargs,
     )
     if safety_filter:
