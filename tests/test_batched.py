@@ -29,8 +29,18 @@ def stacked(obs, agents):
 @pytest.mark.parametrize("name", ["position_swap", "circular_swap", "ramp_merge", "crowd"])
 @pytest.mark.parametrize("filtered", [False, True], ids=["bare", "filtered"])
 def test_batch_equals_single_envs_bit_for_bit(name, filtered):
-    E, seed, steps = 3, 11, 300
-    kwargs = {"max_steps": 70}  # several episode ends, and so auto-resets, in 300 steps
+    # several episode ends, and so auto-resets, in 300 steps
+    check_batch_equals_singles(name, filtered, {"max_steps": 70}, 300)
+
+
+def test_large_crowd_batch_equals_single_envs_bit_for_bit():
+    """Beyond the dense size: the grid search per agent and per score group."""
+    kwargs = {"max_steps": 25, "num_agents": 90, "theta_range": (1.0, 10.0)}
+    check_batch_equals_singles("crowd", True, kwargs, 80)
+
+
+def check_batch_equals_singles(name, filtered, kwargs, steps):
+    E, seed = 3, 11
     venv = BatchedEnv(name, num_envs=E, safety_filter=filtered, **kwargs)
     singles = [rsvo_env.parallel_env(name, **kwargs) for _ in range(E)]
     if filtered:

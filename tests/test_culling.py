@@ -4,6 +4,8 @@ and the actions are those of the all-pairs filter."""
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rsvo_env import barriers, grid, pairs
 from rsvo_env.safety import FilterConfig, SafetyFilter
@@ -171,3 +173,56 @@ def test_double_integrator_crowd_examines_few_pairs():
     cfg = FilterConfig(gamma=1.0, u_max=1.0, dt=0.05, dynamics="double_integrator")
     examined = SafetyFilter(cfg).filter(x, np.zeros((n, 2)), np.ones(n), velocities=v).rows.n_pairs
     assert examined < 0.05 * n * (n - 1) / 2
+
+
+def swapped_weights(theta):
+    """A callable weighting: the R-SVO weights with the roles of egoist and altruist swapped."""
+    from rsvo_env.responsibility import weight_matrix
+
+    w = 1.0 - weight_matrix(theta)
+    np.fill_diagonal(w, 0.0)
+    return w
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    seed=st.integers(0, 2**31),
+    scale=st.sampled_from([1e-3, 1.0, 1e3]),
+    kind=st.sampled_from(["single", "braking", "braking_dt", "hocbf"]),
+    weighting=st.sampled_from(["asymmetric", "symmetric", "callable"]),
+)
+def test_culled_equals_all_pairs_in_any_units(seed, scale, kind, weighting):
+    """Random crowds beyond the dense size, in millimetres to kilometres: the culled filter's
+    actions and flags are the all-pairs filter's."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(65, 160))
+    x = crowd(n, seed % 1000) * scale
+    theta = 10.0 ** rng.uniform(0, 2, n)
+    theta[rng.uniform(size=n) < 0.03] = 0.0
+    u = 2.0 * scale
+    nominal = rng.uniform(-u, u, (n, 2))
+    mode = swapped_weights if weighting == "callable" else weighting
+    dyn = "single_integrator" if kind == "single" else "double_integrator"
+    cfg = FilterConfig(
+        gamma=float(rng.uniform(0.5, 10.0)),
+        safety_radius=scale,
+        u_max=u,
+        dt=0.05 if kind in ("single", "braking_dt") else None,
+        dynamics=dyn,
+        barrier="hocbf" if kind == "hocbf" else "braking",
+        weighting=mode,
+    )
+    flt = SafetyFilter(cfg)
+    v = rng.normal(0, scale, (n, 2)) if dyn != "single_integrator" else None
+    res = flt.filter(x, nominal, theta, velocities=v)
+    I, J = pairs.all_pairs(n)
+    w = flt.pair_weights(theta, None, I, J)
+    if v is None:
+        rows = barriers.single_integrator_rows(x, w, I, J, cfg.gamma, scale, cfg.lo, cfg.hi)
+    else:
+        rows = barriers.double_integrator_rows(
+            x, v, w, I, J, cfg.gamma, scale, cfg.lo, cfg.hi, cfg.barrier, dt=cfg.dt
+        )
+    ref, feasible = exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)[:2]
+    np.testing.assert_array_equal(res.feasible, feasible)
+    np.testing.assert_allclose(res.actions, ref, atol=1e-12 * u)
