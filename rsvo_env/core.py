@@ -24,12 +24,13 @@ from numpy.typing import NDArray
 from rsvo_env import dynamics, observation, planar
 from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_neighbors
-from rsvo_env.pairs import Floor, theta_floor, weight_floor
-from rsvo_env.responsibility import Weighting, check_weighting, smallest_weight, weight_matrix
+from rsvo_env.pairs import Floor
+from rsvo_env.responsibility import Weighting, check_weighting
 from rsvo_env.safety import FilterResult, SafetyFilter, merge_stats
 from rsvo_env.scenarios import Scenario
 from rsvo_env.state import State
 from rsvo_env.validation import check_real
+from rsvo_env.weights import Weights
 
 RESET_OPTIONS = ("theta", "weighting")
 
@@ -101,10 +102,7 @@ class Simulator:
         self.penalties: list[float] = []
         self._warned_options: set[str] = set()
         self.residual: tuple[float, bool, float] | None = None
-        # bumped whenever a weight matrix changes (reset, theta, weighting)
-        self._omega_version = 0
-        self._floor_version = -1
-        self._floor_cache: Floor | None = None
+        self.weights = Weights(self.num_envs, n)  # the one writer: set_theta, set_weighting, reset
         self.rngs: list[np.random.Generator | None] = [None] * self.num_envs
         self.state = State.empty(self.num_envs, n, self.k)
         self.metrics = EpisodeMetrics(
@@ -134,20 +132,17 @@ class Simulator:
         self.penalties.append(c)
 
     def set_theta(self, e: int, theta: Any) -> None:
-        th = self.scenario.check_theta(theta)
-        omega = weight_matrix(th, self.state.weighting[e])
-        self.state.theta[e], self.state.omega[e] = th, omega
-        self.state.omega_min[e] = smallest_weight(omega)
-        self._omega_version += 1
+        self.state.theta[e] = self.scenario.check_theta(theta)
+        self.weights.update([e], self.state.theta, self.state.weighting)
 
     def set_weighting(self, e: int | None, weighting: Weighting) -> None:
         """Weighting of env e's running episode (all envs: None)."""
-        envs = range(self.num_envs) if e is None else [e]
-        omegas = [weight_matrix(self.state.theta[i], weighting) for i in envs]
-        for i, omega in zip(envs, omegas, strict=True):
-            self.state.omega[i], self.state.weighting[i] = omega, weighting
-            self.state.omega_min[i] = smallest_weight(omega)
-            self._omega_version += 1
+        envs = list(range(self.num_envs)) if e is None else [e]
+        for i in envs:
+            check_weighting(weighting, self.state.theta[i])  # all, before anything changes
+        for i in envs:
+            self.state.weighting[i] = weighting
+        self.weights.update(envs, self.state.theta, self.state.weighting)
 
     # ---- episodes ---------------------------------------------------------------------------
     def check_options(self, options: dict | None) -> tuple[NDArray | None, Weighting]:
@@ -205,9 +200,7 @@ class Simulator:
             s.positions[e], s.velocities[e], s.goals[e], s.starts[e] = start, vel, goals, start
             s.theta[e] = th
             s.weighting[e] = weighting
-        s.omega[idx] = weight_matrix(s.theta[idx], weighting)
-        s.omega_min[idx] = smallest_weight(s.omega[idx])
-        self._omega_version += 1
+        self.weights.update(idx, s.theta, s.weighting)
         seg = s.goals[idx] - s.starts[idx]
         s.frame_angle[idx] = np.arctan2(seg[..., 1], seg[..., 0])
         self._derive()
@@ -276,20 +269,10 @@ class Simulator:
 
     # ---- the step ---------------------------------------------------------------------------
     def _floor(self) -> Floor | None:
-        """The weights' floor for the large-N pair search, computed once per weight matrix:
-        per score group when every env has the same named weighting."""
+        """The weights' floor for the large-N pair search (:meth:`Weights.floor`)."""
         if self.n <= DENSE_MAX_AGENTS:
             return None
-        # the core is the one writer of omega, and bumps the version on every write
-        if self._floor_version != self._omega_version:
-            modes = set(map(str, self.state.weighting))
-            mode = self.state.weighting[0]
-            floor = None
-            if len(modes) == 1 and isinstance(mode, str):
-                floor = theta_floor(self.state.theta, mode)
-            self._floor_cache = weight_floor(self.state.omega) if floor is None else floor
-            self._floor_version = self._omega_version
-        return self._floor_cache
+        return self.weights.floor(self.state.theta, self.state.weighting)
 
     def apply_filters(
         self, u_nominal: NDArray[np.float64]
@@ -308,8 +291,9 @@ class Simulator:
                 u,
                 s.theta,
                 vel,
-                s.omega,
-                omega_min=s.omega_min,
+                self.weights.matrix,
+                omega_min=self.weights.omega_min,
+                weighting=self.weights.pair_modes(s.weighting),
                 nearest=s.nearest,
                 floor=self._floor(),
             )
@@ -390,7 +374,7 @@ class Simulator:
             s.velocities[pick],
             s.goals[pick],
             s.theta[pick],
-            s.omega[pick],
+            self.weights.neighbors(s.theta, s.weighting, s.neighbors[pick], pick),
             s.neighbors[pick],
             s.frame_angle[pick] if self.frame == "goal" else None,
             self.safety_radius,

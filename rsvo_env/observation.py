@@ -127,7 +127,7 @@ def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, R, out):
                 rx, ry = c * px - s * py, s * px + c * py
                 o[b], o[b + 1] = rx, ry
                 o[b + 2], o[b + 3] = c * qx - s * qy, s * qx + c * qy
-                o[b + 4] = omega[e, i, j]
+                o[b + 4] = omega[e, i, k]
                 o[b + 5] = theta[e, j]
                 o[b + 6] = np.sqrt(rx * rx + ry * ry) - R
                 o[b + 7] = 1.0
@@ -138,13 +138,14 @@ def observe(
     velocities: NDArray[np.float64],
     goals: NDArray[np.float64],
     theta: NDArray[np.float64],
-    omega: NDArray[np.float64],
+    neighbor_omega: NDArray[np.float64],
     neighbors: NDArray[np.int64],
     frame_angle: NDArray[np.float64] | None,
     safety_radius: float,
 ) -> NDArray[np.float32]:
-    """Observations (E, N, D) float32 of E envs; ``neighbors`` (E, N, K) are local indices.
-    ``frame_angle`` (E, N) rotates into each agent's goal frame (None: world frame)."""
+    """Observations (E, N, D) float32 of E envs; ``neighbors`` (E, N, K) are local indices and
+    ``neighbor_omega`` (E, N, K) each agent's weight against them. ``frame_angle`` (E, N)
+    rotates into each agent's goal frame (None: world frame)."""
     E, n, K = neighbors.shape
     out = np.empty((E, n, size(K)), dtype=np.float32)
     use_frame = frame_angle is not None
@@ -154,7 +155,7 @@ def observe(
         np.ascontiguousarray(velocities),
         np.ascontiguousarray(goals),
         np.ascontiguousarray(theta),
-        np.ascontiguousarray(omega),
+        np.ascontiguousarray(neighbor_omega),
         np.ascontiguousarray(neighbors),
         np.ascontiguousarray(angle),
         use_frame,

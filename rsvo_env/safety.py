@@ -11,6 +11,7 @@ as the stage of its step right before integration.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -107,12 +108,25 @@ class SafetyFilter:
         return radius
 
     def pair_weights(
-        self, theta: NDArray, omega: NDArray | None, I: NDArray, J: NDArray
+        self,
+        theta: NDArray,
+        omega: NDArray | None,
+        I: NDArray,
+        J: NDArray,
+        weighting: Sequence[str] | None = None,
     ) -> NDArray[np.float64]:
         """(P, 2) weights of each pair (flat agent indices): omega_IJ and omega_JI (Thm. 1),
-        summing to 1. ``theta`` is (N,) or (E, N), ``omega`` (N, N) or (E, N, N)."""
+        summing to 1. ``theta`` is (N,) or (E, N), ``omega`` (N, N) or (E, N, N);
+        ``weighting``: each env's named weighting, for scores without a matrix (else the
+        configured one)."""
         mode = self.config.weighting
         n = theta.shape[-1]
+        if omega is None and weighting is not None:
+            th = theta.reshape(-1)
+            w = pair_omega(th[I], th[J])
+            symmetric = np.array([m == "symmetric" for m in weighting])[I // n]
+            w = np.where(symmetric, 0.5, w)
+            return np.stack([w, 1.0 - w], axis=1)
         if omega is None and callable(mode):
             omega = weight_matrix(theta, mode)
         if omega is not None:
@@ -182,6 +196,7 @@ class SafetyFilter:
         omega_min: NDArray[np.float64] | None = None,
         nearest: NDArray[np.float64] | None = None,
         floor: pairs.Floor | None = None,
+        weighting: Sequence[str] | None = None,
     ) -> FilterResult:
         """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
 
@@ -227,7 +242,7 @@ class SafetyFilter:
         else:
             radius = self.pair_radius(theta, omega, omega_min)
             I, J = pairs.candidate_pairs(positions, radius)
-        weights = self.pair_weights(theta, omega, I, J)
+        weights = self.pair_weights(theta, omega, I, J, weighting)
         if cfg.dynamics == "single_integrator":
             rows = barriers.single_integrator_rows(
                 pos, weights, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi

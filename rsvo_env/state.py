@@ -26,10 +26,9 @@ class State:
     (each agent's start-to-goal heading), ``nearest`` (distance to the nearest neighbour),
     ``at_goal``, ``rh_active`` (the right-hand rule turns the agent's nominal), ``reached`` (at its
     goal at least once): (E, N), the first three derived from the current positions once per
-    step; ``omega``: (E, N, N),
-    recomputed whenever theta or the weighting changes, with ``omega_min`` (E,) its smallest
-    off-diagonal entry; ``neighbors``: (E, N, K) local indices of
-    the K nearest neighbours, nearest first; ``weighting``: the mode of each env.
+    step; ``neighbors``: (E, N, K) local indices of the K nearest neighbours, nearest first;
+    ``weighting``: the mode of each env. The weights live in the core's
+    :class:`rsvo_env.weights.Weights`.
     """
 
     positions: NDArray[np.float64]
@@ -37,8 +36,6 @@ class State:
     goals: NDArray[np.float64]
     starts: NDArray[np.float64]
     theta: NDArray[np.float64]
-    omega: NDArray[np.float64]
-    omega_min: NDArray[np.float64]
     frame_angle: NDArray[np.float64]
     nearest: NDArray[np.float64]
     at_goal: NDArray[np.bool_]
@@ -56,8 +53,6 @@ class State:
             goals=np.zeros((E, n, 2)),
             starts=np.zeros((E, n, 2)),
             theta=np.ones((E, n)),
-            omega=np.full((E, n, n), 0.5),
-            omega_min=np.full(E, 0.5),
             frame_angle=np.zeros((E, n)),
             nearest=np.full((E, n), np.inf),
             at_goal=np.zeros((E, n), dtype=bool),
@@ -93,7 +88,15 @@ class World:
     goals = property(lambda self: self._row("goals"))
     starts = property(lambda self: self._row("starts"))
     theta = property(lambda self: self._row("theta"))
-    omega = property(lambda self: self._row("omega"))
+
+    @property
+    def omega(self) -> NDArray[np.float64]:
+        """The (N, N) weight matrix (Thm. 1): the kept one, or computed now from the scores
+        for a crowd beyond ``weights.DENSE_MAX`` agents."""
+        s = self._sim.state
+        return _read_only(
+            self._sim.weights.env_matrix(self._e, s.theta[self._e], s.weighting[self._e])
+        )
 
     @property
     def weighting(self) -> Weighting:

@@ -93,11 +93,11 @@ def test_spaces_and_shapes():
 def test_reset_options_hold_for_auto_resets():
     venv = BatchedEnv("position_swap", num_envs=2, max_steps=5)
     venv.reset(seed=0, options={"theta": [[1.0, 4.0], [2.0, 2.0]], "weighting": "symmetric"})
-    assert np.allclose(venv.sim.state.omega[:, 0, 1], 0.5)
+    assert np.allclose(venv.sim.weights.matrix[:, 0, 1], 0.5)
     for _ in range(6):  # past an auto-reset
         venv.step(np.zeros((2, 2, 2)))
     np.testing.assert_array_equal(venv.sim.state.theta, [[1.0, 4.0], [2.0, 2.0]])
-    assert np.allclose(venv.sim.state.omega[:, 0, 1], 0.5)
+    assert np.allclose(venv.sim.weights.matrix[:, 0, 1], 0.5)
     venv.reset(seed=0, options={"theta": [1.0, 4.0]})  # one row for every env
     np.testing.assert_array_equal(venv.sim.state.theta, [[1.0, 4.0], [1.0, 4.0]])
 

@@ -112,3 +112,47 @@ def test_double_integrator_crowd_flags_every_infeasible_step():
         flagged += int((~res.feasible).sum())
         p, v = double_integrator_step(p, v, res.actions, dt)
     assert flagged > 0  # the crowd is dense enough to test the flags
+
+
+def run_batch(steps, setup):
+    from rsvo_env.vector import BatchedEnv
+
+    venv = BatchedEnv("crowd", num_envs=2, num_agents=90, theta_range=(1.0, 10.0), max_steps=30)
+    venv.reset(seed=3)
+    setup(venv)
+    out, rng = [], np.random.default_rng(0)
+    for _ in range(steps):
+        obs, reward, _, _, info = venv.step(rng.uniform(-1, 1, (2, 90, 2)).astype(np.float32))
+        out.append((obs, reward, info["u_safe"], info["feasible"]))
+    return venv, out
+
+
+def halves(theta):
+    return np.where(np.eye(len(theta)), 0.0, 0.5)
+
+
+@pytest.mark.parametrize("env1_mode", ["asymmetric", "symmetric", "callable"])
+def test_weights_from_scores_are_the_matrix(monkeypatch, env1_mode):
+    """Beyond DENSE_MAX agents the core keeps no weight matrix: observations, safe actions and
+    rewards are those of the matrix, through auto-resets, and world.omega is still the matrix."""
+    from rsvo_env import weights
+    from rsvo_env.state import World
+
+    callable_mode = halves if env1_mode == "callable" else None
+    mode = callable_mode or env1_mode
+
+    def setup(venv):
+        venv.sim.set_weighting(1, mode)  # env 1 differs from env 0 (asymmetric)
+
+    kept, kept_out = run_batch(70, setup)
+    monkeypatch.setattr(weights, "DENSE_MAX", 50)
+    lazy, lazy_out = run_batch(70, setup)
+    assert kept.sim.weights.matrix is not None
+    # only a callable weighting makes the core keep its matrix
+    assert (lazy.sim.weights.matrix is None) == (callable_mode is None)
+    for a, b in zip(kept_out, lazy_out, strict=True):
+        for x, y in zip(a, b, strict=True):
+            np.testing.assert_array_equal(x, y)
+    for e in range(2):
+        world_kept, world_lazy = World(kept.sim, e).omega, World(lazy.sim, e).omega
+        np.testing.assert_array_equal(world_kept, world_lazy)
