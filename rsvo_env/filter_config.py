@@ -92,6 +92,15 @@ class FilterConfig:
                     f"FilterConfig: the braking barrier needs u_min < 0 < u_max, got "
                     f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
                 )
+            reach = float(np.min(np.minimum(-lo, hi)) + np.hypot(*np.maximum(-lo, hi)))
+            if self.dt is not None and self.dt**2 * reach >= self.safety_radius:
+                # the sampled-data row divides by the gap at the next sample, which h >= 0 keeps
+                # above safety_radius - dt^2 (a_max + |U|) (docs/double_integrator.md)
+                raise ValueError(
+                    f"FilterConfig: dt^2 (a_max + |u_max|) = {self.dt**2 * reach!r} >= "
+                    f"safety_radius = {self.safety_radius!r}: the sampled-data guarantee of the "
+                    "braking barrier needs dt^2 (a_max + |u_max|) < safety_radius"
+                )
         object.__setattr__(self, "lo", lo)
         object.__setattr__(self, "hi", hi)
         if self.dynamics not in DYNAMICS:

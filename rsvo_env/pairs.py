@@ -74,7 +74,8 @@ def double_integrator_radii(
     speed-change vector). Beyond the radius RHS > 0, where every split gives ``s_ij = omega
     RHS``, and RHS is bounded below with the closing speed ``-q <= V = |v_i| + max_j |v_j|``:
     braking, closing: ``RHS >= |dp| (-A + gamma A (|dp| - Ds - V^2 / (2A)) / V)``; braking with
-    ``dt``, opening: ``RHS >= 2 gamma |dp| (|dp| - Ds) / dt``; hocbf:
+    ``dt``, opening: ``RHS >= 2 gamma |dp| (|dp| - Ds) / dt``, and the sampled-data row (its
+    bound alpha* <= -U / omega, from ``G(-U / omega) >= (1 - gamma dt) h``); hocbf:
     ``RHS >= g1 g2 (|dp|^2 - Ds^2) - 2 (g1 + g2) |dp| V``.
     """
     U = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
@@ -87,6 +88,12 @@ def double_integrator_radii(
         r = safety_radius + V * V / (2.0 * A) + V * (U / w + A) / (gamma * A)
         if dt is not None:
             r = np.maximum(r, safety_radius + U * dt / (2.0 * gamma * w))
+            # the sampled-data row cannot bind once G(-U / omega) >= (1 - gamma dt) h, with E
+            # at most U^2 dt^3 / (2 R_min), R_min = Ds - dt^2 (a_max + U) > 0 (the config's bound)
+            R_min = safety_radius - dt * dt * (A / 2.0 + U)
+            e = (U / w + U * U * dt * dt / (2.0 * R_min)) if R_min > 0 else np.inf
+            sampled = safety_radius + V / gamma + V * V / (2.0 * A) + U * dt / (2.0 * gamma * w)
+            r = np.maximum(r, sampled + (2.0 * V * e + dt * e * e) / (2.0 * A * gamma))
     else:
         g2 = gamma if gamma2 is None else gamma2
         a = w * gamma * g2
