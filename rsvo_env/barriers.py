@@ -14,11 +14,13 @@ E * N agents: agent ``e * N + i`` is agent i of env e, and pairs never cross env
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
+
+from rsvo_env.sampled import sampled_braking_rhs
 
 BARRIERS = ("braking", "hocbf")
 SPLITS = ("capability", "sign_aware", "paper")
@@ -222,54 +224,6 @@ def single_integrator_rows(
     return _finish(n, I, J, A_i, b_i, b_j, h, lo, hi, ~none, none, none, cull)
 
 
-def sampled_braking_rhs(
-    dist: NDArray,
-    q: NDArray,
-    dv2: NDArray,
-    h: NDArray,
-    A: float,
-    U: float,
-    gamma: float,
-    dt: float,
-    safety_radius: float,
-) -> NDArray[np.float64]:
-    """RHS of the pair row ``-dp.(a_i - a_j) <= RHS`` under which the braking barrier at the
-    next sample keeps ``h+ >= (1 - gamma dt) h`` (``docs/double_integrator.md``, sampled data).
-
-    In the frame of dp at the sample (radial r, tangential t), a constant relative acceleration
-    alpha gives ``R = |dp| + dt q + dt^2 alpha_r / 2 <= |dp+|`` and a closing speed
-    ``-q+ <= max(0, -q - dt alpha_r) + E``, where ``E = dt w_t^2 / (8 R)`` bounds what a
-    tangential speed ``w_t`` reversed within the step adds (0 when ``|w_t| >= dt cap_t``). So
-    ``h+ >= G(alpha_r) = R + g - Ds - (max(0, -q - dt alpha_r) + E)^2 / (2A)``, increasing in
-    ``alpha_r``, where ``g = T_min^2 / (2 rho_max)`` is the least the tangential offset adds to
-    ``|dp+| = sqrt(R^2 + T^2)`` over the box: ``G >= (1 - gamma dt) h`` is
-    ``alpha_r >= alpha*``, one half-plane. Full braking (``alpha_r = A``) meets it whenever
-    ``E = 0`` and ``h >= 0``.
-    """
-    with np.errstate(divide="ignore", invalid="ignore"):
-        wt2 = np.maximum(dv2 - q * q, 0.0)
-        R_low = dist + dt * q - dt * dt * U  # the smallest R over the box (|alpha_r| <= 2 U)
-        E = np.where(wt2 < (2.0 * U * dt) ** 2, dt * wt2 / (8.0 * R_low), 0.0)
-        E = np.where(R_low > 0, E, np.inf)
-        c = (1.0 - gamma * dt) * h
-        # what the tangential offset T adds to |dp+| = sqrt(R^2 + T^2) at the least
-        wt = np.sqrt(wt2)
-        T_min = np.maximum(dt * wt - dt * dt * U, 0.0)
-        rho_max = np.hypot(dist + dt * q + dt * dt * U, dt * wt + dt * dt * U)
-        Ds = safety_radius - T_min * T_min / (2.0 * rho_max)
-        # closing after the step: y = -q - dt alpha_r > 0 solves y' = y + E,
-        # y'^2 / (2A) + dt (y' - E) / 2 = K
-        K = dist + 0.5 * dt * q - Ds - c
-        disc = (A * dt) ** 2 + 8.0 * A * (K + 0.5 * dt * E)
-        y = 0.5 * (-A * dt + np.sqrt(np.maximum(disc, 0.0))) - E
-        closing_root = (disc >= 0) & (y >= 0)
-        alpha_closing = (-q - y) / dt
-        # opening after the step: G = R - Ds - E^2 / (2A) >= c
-        alpha_open = 2.0 * (c + Ds + E * E / (2.0 * A) - dist - dt * q) / (dt * dt)
-        alpha = np.where(closing_root, alpha_closing, np.maximum(alpha_open, -q / dt))
-        return -alpha * dist
-
-
 def double_integrator_rows(
     positions: NDArray,
     velocities: NDArray,
@@ -311,6 +265,7 @@ def double_integrator_rows(
     dist = np.linalg.norm(dp, axis=1)
     dpdv = np.einsum("ij,ij->i", dp, dv)
     dv2 = np.einsum("ij,ij->i", dv, dv)
+    keep_sign = np.zeros(0, dtype=np.int64)  # pairs that get the tangential row (below)
     if barrier == "braking":
         a_max = float(np.min(np.minimum(-lo, hi)))
         A_brake = 2.0 * a_max
@@ -334,7 +289,17 @@ def double_integrator_rows(
             rhs = np.where(closing, rhs, rhs_open)
             # and the sampled-data row: h at the next sample, not only its rate now
             U = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
-            sampled = sampled_braking_rhs(dist, q, dv2, h, A_brake, U, gamma, dt, safety_radius)
+            args = (dist, q, dv2, h, A_brake, U, gamma, dt, safety_radius)
+            sampled = sampled_braking_rhs(*args)
+            # Nearly head-on at h ~ 0 the reversal bound E can keep full braking out of the row:
+            # there E is dropped and one more row forbids reversing the tangential speed within
+            # the step, which full braking (no tangential part) meets.
+            wt2 = np.maximum(dv2 - q * q, 0.0)
+            reach = box_support(dp, lo, hi) + box_support(-dp, lo, hi)
+            stuck = (sampled < -reach) & (h >= 0) & (wt2 > 0)
+            if stuck.any():
+                sampled = np.where(stuck, sampled_braking_rhs(*args, reversal=False), sampled)
+                keep_sign = np.nonzero(stuck)[0]
             rhs = np.minimum(rhs, sampled)
             exists = np.ones(len(I), dtype=bool)
     else:
@@ -370,4 +335,28 @@ def double_integrator_rows(
         s_i, s_j = np.where(bad, -1.0, s_i), np.where(bad, -1.0, s_j)
         h = np.where(bad, -safety_radius, h)
         exists = exists | bad
-    return _finish(n, I, J, A_i, s_i, s_j, h, lo, hi, exists, unrecoverable, capped, cull)
+    if len(keep_sign) == 0:
+        return _finish(n, I, J, A_i, s_i, s_j, h, lo, hi, exists, unrecoverable, capped, cull)
+    # the tangential rows: -e_t.(a_i - a_j) <= w_t / dt, scaled by |dp| like the others, split by
+    # the same weights (a RHS >= 0 gives every split omega RHS)
+    k = keep_sign
+    wt = np.sqrt(np.maximum(dv2[k] - q[k] ** 2, 0.0))
+    e_t = (dv[k] - q[k, None] * dp[k] / dist[k, None]) / wt[:, None]
+    rhs_t = dist[k] * wt / dt
+    P = len(I)
+    rows = _finish(
+        n,
+        np.concatenate([I, I[k]]),
+        np.concatenate([J, J[k]]),
+        np.concatenate([A_i, -dist[k, None] * e_t]),
+        np.concatenate([s_i, w[k] * rhs_t]),
+        np.concatenate([s_j, (1.0 - w[k]) * rhs_t]),
+        np.concatenate([h, h[k]]),
+        lo,
+        hi,
+        np.concatenate([exists, np.ones(len(k), dtype=bool)]),
+        np.concatenate([unrecoverable, np.zeros(len(k), dtype=bool)]),
+        np.concatenate([capped, np.zeros(len(k), dtype=bool)]),
+        cull,
+    )
+    return replace(rows, pair_h=h, n_pairs=P)

@@ -1,0 +1,58 @@
+"""The braking barrier of a double-integrator pair at the next sample (zero-order hold): the
+sampled-data row that keeps ``h+ >= (1 - gamma dt) h`` between two samples, not only its rate at
+one (``docs/double_integrator.md``, "Sampled data")."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+def sampled_braking_rhs(
+    dist: NDArray,
+    q: NDArray,
+    dv2: NDArray,
+    h: NDArray,
+    A: float,
+    U: float,
+    gamma: float,
+    dt: float,
+    safety_radius: float,
+    reversal: bool = True,
+) -> NDArray[np.float64]:
+    """RHS of the pair row ``-dp.(a_i - a_j) <= RHS`` under which the braking barrier at the
+    next sample keeps ``h+ >= (1 - gamma dt) h`` (``docs/double_integrator.md``, sampled data).
+
+    In the frame of dp at the sample (radial r, tangential t), a constant relative acceleration
+    alpha gives ``R = |dp| + dt q + dt^2 alpha_r / 2 <= |dp+|`` and a closing speed
+    ``-q+ <= max(0, -q - dt alpha_r) + E``, where ``E = dt w_t^2 / (8 R)`` bounds what a
+    tangential speed ``w_t`` reversed within the step adds (0 when ``|w_t| >= dt cap_t``). So
+    ``h+ >= G(alpha_r) = R + g - Ds - (max(0, -q - dt alpha_r) + E)^2 / (2A)``, increasing in
+    ``alpha_r``, where ``g = T_min^2 / (2 rho_max)`` is the least the tangential offset adds to
+    ``|dp+| = sqrt(R^2 + T^2)`` over the box: ``G >= (1 - gamma dt) h`` is
+    ``alpha_r >= alpha*``, one half-plane. Full braking (``alpha_r = A``) meets it whenever
+    ``E = 0`` and ``h >= 0``. ``reversal=False``: E = 0, for actions that cannot reverse the
+    tangential speed (:func:`double_integrator_rows` adds the row that forbids it).
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        wt2 = np.maximum(dv2 - q * q, 0.0)
+        R_low = dist + dt * q - dt * dt * U  # the smallest R over the box (|alpha_r| <= 2 U)
+        window = reversal & (wt2 < (2.0 * U * dt) ** 2)
+        E = np.where(R_low > 0, np.where(window, dt * wt2 / (8.0 * R_low), 0.0), np.inf)
+        c = (1.0 - gamma * dt) * h
+        # what the tangential offset T adds to |dp+| = sqrt(R^2 + T^2) at the least
+        wt = np.sqrt(wt2)
+        T_min = np.maximum(dt * wt - dt * dt * U, 0.0)
+        rho_max = np.hypot(dist + dt * q + dt * dt * U, dt * wt + dt * dt * U)
+        Ds = safety_radius - T_min * T_min / (2.0 * rho_max)
+        # closing after the step: y = -q - dt alpha_r > 0 solves y' = y + E,
+        # y'^2 / (2A) + dt (y' - E) / 2 = K
+        K = dist + 0.5 * dt * q - Ds - c
+        disc = (A * dt) ** 2 + 8.0 * A * (K + 0.5 * dt * E)
+        y = 0.5 * (-A * dt + np.sqrt(np.maximum(disc, 0.0))) - E
+        closing_root = (disc >= 0) & (y >= 0)
+        alpha_closing = (-q - y) / dt
+        # opening after the step: G = R - Ds - E^2 / (2A) >= c
+        alpha_open = 2.0 * (c + Ds + E * E / (2.0 * A) - dist - dt * q) / (dt * dt)
+        alpha = np.where(closing_root, alpha_closing, np.maximum(alpha_open, -q / dt))
+        return -alpha * dist
