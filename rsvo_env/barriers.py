@@ -266,6 +266,8 @@ def double_integrator_rows(
     dpdv = np.einsum("ij,ij->i", dp, dv)
     dv2 = np.einsum("ij,ij->i", dv, dv)
     keep_sign = np.zeros(0, dtype=np.int64)  # pairs that get the tangential row (below)
+    # each agent's most evasive push along dp over its box: max dp.a_i, max -dp.a_j
+    push_i, push_j = box_support(dp, lo, hi), box_support(-dp, lo, hi)
     if barrier == "braking":
         a_max = float(np.min(np.minimum(-lo, hi)))
         A_brake = 2.0 * a_max
@@ -295,8 +297,7 @@ def double_integrator_rows(
             # there E is dropped and one more row forbids reversing the tangential speed within
             # the step, which full braking (no tangential part) meets.
             wt2 = np.maximum(dv2 - q * q, 0.0)
-            reach = box_support(dp, lo, hi) + box_support(-dp, lo, hi)
-            stuck = (sampled < -reach) & (h >= 0) & (wt2 > 0)
+            stuck = (sampled < -(push_i + push_j)) & (h >= 0) & (wt2 > 0)
             if stuck.any():
                 sampled = np.where(stuck, sampled_braking_rhs(*args, reversal=False), sampled)
                 keep_sign = np.nonzero(stuck)[0]
@@ -319,8 +320,7 @@ def double_integrator_rows(
     else:
         s_i = np.where(finite_rhs >= 0.0, w * finite_rhs, (1.0 - w) * finite_rhs)
         if split == "capability":
-            cap_i = box_support(-A_i, lo, hi)  # agent i's most evasive value of -A_i . a
-            cap_j = box_support(A_i, lo, hi)  # agent j's, for its row -(-A_i) . a_j
+            cap_i, cap_j = c * push_i, c * push_j
             unrecoverable = exists & (finite_rhs < -(cap_i + cap_j))
             clipped = np.clip(s_i, -cap_i, finite_rhs + cap_j)
             capped = exists & ~unrecoverable & (clipped != s_i)

@@ -5,6 +5,7 @@ one (``docs/double_integrator.md``, "Sampled data")."""
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 
@@ -34,25 +35,40 @@ def sampled_braking_rhs(
     ``E = 0`` and ``h >= 0``. ``reversal=False``: E = 0, for actions that cannot reverse the
     tangential speed (:func:`double_integrator_rows` adds the row that forbids it).
     """
-    with np.errstate(divide="ignore", invalid="ignore"):
-        wt2 = np.maximum(dv2 - q * q, 0.0)
-        R_low = dist + dt * q - dt * dt * U  # the smallest R over the box (|alpha_r| <= 2 U)
-        window = reversal & (wt2 < (2.0 * U * dt) ** 2)
-        E = np.where(R_low > 0, np.where(window, dt * wt2 / (8.0 * R_low), 0.0), np.inf)
-        c = (1.0 - gamma * dt) * h
+    out = np.empty(len(dist))
+    _sampled(dist, q, dv2, h, A, U, gamma, dt, safety_radius, reversal, out)
+    return out
+
+
+@njit(cache=True)
+def _sampled(dist, q, dv2, h, A, U, gamma, dt, safety_radius, reversal, out):
+    """:func:`sampled_braking_rhs`, one pair at a time (NaN in, NaN out)."""
+    window2 = (2.0 * U * dt) ** 2
+    for p in range(dist.shape[0]):
+        d, qp = dist[p], q[p]
+        wt2 = max(dv2[p] - qp * qp, 0.0)
+        R_low = d + dt * qp - dt * dt * U  # the smallest R over the box (|alpha_r| <= 2 U)
+        if R_low > 0:
+            E = dt * wt2 / (8.0 * R_low) if reversal and wt2 < window2 else 0.0
+        else:
+            E = np.inf
+        c = (1.0 - gamma * dt) * h[p]
         # what the tangential offset T adds to |dp+| = sqrt(R^2 + T^2) at the least
         wt = np.sqrt(wt2)
-        T_min = np.maximum(dt * wt - dt * dt * U, 0.0)
-        rho_max = np.hypot(dist + dt * q + dt * dt * U, dt * wt + dt * dt * U)
+        T_min = max(dt * wt - dt * dt * U, 0.0)
+        rho_max = np.hypot(d + dt * qp + dt * dt * U, dt * wt + dt * dt * U)
         Ds = safety_radius - T_min * T_min / (2.0 * rho_max)
         # closing after the step: y = -q - dt alpha_r > 0 solves y' = y + E,
         # y'^2 / (2A) + dt (y' - E) / 2 = K
-        K = dist + 0.5 * dt * q - Ds - c
+        K = d + 0.5 * dt * qp - Ds - c
         disc = (A * dt) ** 2 + 8.0 * A * (K + 0.5 * dt * E)
-        y = 0.5 * (-A * dt + np.sqrt(np.maximum(disc, 0.0))) - E
-        closing_root = (disc >= 0) & (y >= 0)
-        alpha_closing = (-q - y) / dt
-        # opening after the step: G = R - Ds - E^2 / (2A) >= c
-        alpha_open = 2.0 * (c + Ds + E * E / (2.0 * A) - dist - dt * q) / (dt * dt)
-        alpha = np.where(closing_root, alpha_closing, np.maximum(alpha_open, -q / dt))
-        return -alpha * dist
+        y = 0.5 * (-A * dt + np.sqrt(max(disc, 0.0))) - E
+        if disc >= 0 and y >= 0:
+            alpha = (-qp - y) / dt
+        else:
+            # opening after the step: G = R - Ds - E^2 / (2A) >= c
+            alpha = 2.0 * (c + Ds + E * E / (2.0 * A) - d - dt * qp) / (dt * dt)
+            floor = -qp / dt
+            if not (alpha >= floor or alpha != alpha):
+                alpha = floor
+        out[p] = -alpha * d
