@@ -88,32 +88,44 @@ def _qp(
         return None  # a zero row with a negative right side: nothing satisfies it
     keep = norms > 0
     A, b = A[keep] / norms[keep, None], b[keep] / norms[keep]
-    P, G = 2.0 * np.eye(2), A if len(b) else None
-    if solver not in qpsolvers.dense_solvers:
-        # a sparse-only solver (osqp, ...) would otherwise warn on every call about converting
-        P = sparse.csc_matrix(P)
-        G = None if G is None else sparse.csc_matrix(G)
-    problem = qpsolvers.Problem(
-        P,
-        -2.0 * np.asarray(nominal, dtype=np.float64),
-        G,
-        b if len(b) else None,
-        lb=lo,
-        ub=hi,
-    )
-    sol = qpsolvers.solve_problem(problem, solver, **options)
-    x = sol.x
-    if x is None or not np.all(np.isfinite(x)):
-        return None
+    variants = [(A, b)]
+    if len(b) > 1:
+        # Rows with the same unit normal (to 1e-12) are one half-plane, the tightest. Duplicates
+        # can make an interior-point solver degenerate (clarabel runs out of iterations), and
+        # some single rows stall it too, so each form is tried in turn.
+        key = np.round(A, 12)
+        order = np.lexsort((b, key[:, 1], key[:, 0]))
+        first = np.ones(len(b), dtype=bool)
+        first[1:] = np.any(key[order][1:] != key[order][:-1], axis=1)
+        if not first.all():
+            variants.append((A[order][first], b[order][first]))
     scale = float(max(np.max(np.abs(lo)), np.max(np.abs(hi))))
-    residual = max(
-        float(np.max(A @ x - b - 1e-9 * (scale + np.abs(b)), initial=0.0)),
-        float(np.max(lo - x)),
-        float(np.max(x - hi)),
-    )
-    almost = str(sol.extras.get("status", "")).endswith("AlmostSolved")
-    if (sol.found or almost) and residual <= 1e-9:
-        return np.asarray(x, dtype=np.float64)
+    for A_try, b_try in variants:
+        P, G = 2.0 * np.eye(2), A_try if len(b_try) else None
+        if solver not in qpsolvers.dense_solvers:
+            # a sparse-only solver (osqp, ...) would otherwise warn on every call about converting
+            P = sparse.csc_matrix(P)
+            G = None if G is None else sparse.csc_matrix(G)
+        problem = qpsolvers.Problem(
+            P,
+            -2.0 * np.asarray(nominal, dtype=np.float64),
+            G,
+            b_try if len(b_try) else None,
+            lb=lo,
+            ub=hi,
+        )
+        sol = qpsolvers.solve_problem(problem, solver, **options)
+        x = sol.x
+        if x is None or not np.all(np.isfinite(x)):
+            continue
+        residual = max(
+            float(np.max(A @ x - b - 1e-9 * (scale + np.abs(b)), initial=0.0)),
+            float(np.max(lo - x)),
+            float(np.max(x - hi)),
+        )
+        almost = str(sol.extras.get("status", "")).endswith("AlmostSolved")
+        if (sol.found or almost) and residual <= 1e-9:
+            return np.asarray(x, dtype=np.float64)
     return None
 
 
