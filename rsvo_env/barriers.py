@@ -247,8 +247,11 @@ def double_integrator_rows(
     ``q = dp.dv/|dp|``; ``c = 1``; while closing (``q < 0``)
     ``RHS = (|dv|^2 - q^2) - A |dp| + gamma h A |dp| / (-q)``. While opening there is no row,
     unless ``dt`` is given: then the one-step row
-    ``RHS = (|dv|^2 - q^2) + 2 |dp| (q + gamma (|dp| - Ds)) / dt`` keeps a sampled system from
-    crossing into ``h < 0`` between two samples.
+    ``RHS = (|dv|^2 - q^2) + 2 |dp| (q + gamma (|dp| - Ds)) / dt``, and for every pair the
+    sampled-data bound :func:`rsvo_env.sampled.sampled_braking_rhs` (``h+ >= (1 - gamma dt) h``
+    at the next sample), the smallest RHS of the three; where that bound's reversal term puts
+    it beyond the box, the pair also gets a row keeping its tangential relative speed from
+    changing sign within the step (``-e_t.(a_i - a_j) <= w_t / dt``).
     ``barrier="hocbf"``: ``h = |dp|^2 - Ds^2``, ``c = 2``,
     ``RHS = 2 |dv|^2 + 2 (g1 + g2) dp.dv + g1 g2 h``.
     Splits of RHS into ``s_ij + s_ji``: ``paper`` (``omega RHS``), ``sign_aware`` (``omega RHS``
