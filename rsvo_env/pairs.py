@@ -15,7 +15,7 @@ from scipy.spatial import cKDTree
 
 from rsvo_env import grid
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, env_offsets
-from rsvo_env.responsibility import pair_omega
+from rsvo_env.responsibility import Weighting, pair_omega, weight_matrix
 
 # (floor (E, N, K), group (E, N), required pairs (P, 2)): see weight_floor and theta_floor
 Floor = tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]
@@ -160,6 +160,16 @@ def theta_floor(theta: NDArray, mode: str) -> Floor | None:
     e2, j = np.nonzero(theta[e] > 0)
     a, b = e[e2] * n + i[e2], e[e2] * n + j
     return floor, group, np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1).astype(np.int64)
+
+
+def floor_of(theta: NDArray, mode: Weighting, matrix: NDArray | None = None) -> Floor:
+    """The floor of weighting ``mode`` for scores (E, N): :func:`theta_floor` for a named mode
+    where it applies, else :func:`weight_floor` of the weight matrices (``matrix``, or built)."""
+    if isinstance(mode, str):
+        floor = theta_floor(theta, mode)
+        if floor is not None:
+            return floor
+    return weight_floor(weight_matrix(theta, mode) if matrix is None else matrix)
 
 
 def pairs_within_agent_radii(

@@ -95,9 +95,13 @@ def check_weighting(mode: Weighting, theta: ArrayLike) -> None:
     if callable(mode):
         weight_matrix(theta, mode)
     elif not isinstance(mode, str) or mode not in WEIGHTING_MODES:
-        raise ValueError(
-            f"weighting mode {mode!r} is unknown; use one of {WEIGHTING_MODES} or a callable"
-        )
+        raise _unknown(mode)
+
+
+def _unknown(mode: object) -> ValueError:
+    return ValueError(
+        f"weighting mode {mode!r} is unknown; use one of {WEIGHTING_MODES} or a callable"
+    )
 
 
 def _string_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
@@ -119,9 +123,7 @@ def _string_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
             low = np.tril(np.ones((b - a, b - a), dtype=bool), -1)
             block[..., low] = 1.0 - np.swapaxes(block, -1, -2)[..., low]
     else:
-        raise ValueError(
-            f"weighting mode {mode!r} is unknown; use one of {WEIGHTING_MODES} or a callable"
-        )
+        raise _unknown(mode)
     diag = np.arange(n)
     w[..., diag, diag] = 0.0
     return w

@@ -284,16 +284,15 @@ class SafetyFilter:
         """:func:`pairs.weight_floor` of the weights in force, from the scores alone (O(N)
         memory) for a named weighting."""
         mode = self.config.weighting
-        if omega is None and not callable(mode):
-            # a simulator calls with the same scores step after step: keep the last floor
-            last = self._last_floor
-            if last is not None and np.array_equal(last[0], theta):
-                return last[1]
-            floor = pairs.theta_floor(theta, mode)
-            if floor is not None:
-                self._last_floor = (theta.copy(), floor)
-                return floor
-        return pairs.weight_floor(weight_matrix(theta, mode) if omega is None else omega)
+        if omega is not None:  # a caller's matrix, whatever the configured mode says
+            return pairs.weight_floor(omega)
+        if callable(mode):
+            return pairs.floor_of(theta, mode)
+        # a simulator calls with the same scores step after step: keep the last floor
+        last = self._last_floor
+        if last is None or not np.array_equal(last[0], theta):
+            self._last_floor = last = (theta.copy(), pairs.floor_of(theta, mode))
+        return last[1]
 
     def _apply_dense(
         self, positions: NDArray, nominal: NDArray, theta: NDArray, omega: NDArray | None

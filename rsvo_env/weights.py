@@ -14,7 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.pairs import Floor, theta_floor, weight_floor
+from rsvo_env.pairs import Floor, floor_of, weight_floor
 from rsvo_env.responsibility import (
     Weighting,
     min_pair_weight,
@@ -79,9 +79,7 @@ class Weights:
         if self._floor is not None and self._floor[0] == self.version:
             return self._floor[1]
         if len({str(m) for m in modes}) == 1 and isinstance(modes[0], str):
-            floor = theta_floor(theta, modes[0])
-            if floor is None:
-                floor = weight_floor(self._whole(theta, modes))
+            floor = floor_of(theta, modes[0], self.matrix)
         elif self.matrix is not None:
             floor = weight_floor(self.matrix)
         else:
@@ -89,18 +87,12 @@ class Weights:
         self._floor = (self.version, floor)
         return floor
 
-    def _whole(self, theta: NDArray, modes: Sequence[Weighting]) -> NDArray[np.float64]:
-        if self.matrix is not None:
-            return self.matrix
-        return np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
-
     def _floor_by_env(self, theta: NDArray, modes: Sequence[Weighting]) -> Floor:
         """Envs with different named weightings: each env's floor, padded to the most groups
         (an infinite floor searches nothing)."""
         parts = []
         for e, (t, m) in enumerate(zip(theta, modes, strict=True)):
-            part = theta_floor(t[None], str(m)) or weight_floor(weight_matrix(t[None], m))
-            parts.append((e, part))
+            parts.append((e, floor_of(t[None], m)))
         K = max(p[0].shape[-1] for _, p in parts)
         floor = np.full((len(parts), self.n, K), np.inf)
         for e, p in parts:
