@@ -6,53 +6,38 @@
    when the ``baselines`` extra is installed.
 2. The single ``RSVOParallelEnv`` (PettingZoo dicts) of ``crowd`` at N = 6, 100, 1000, bare and
    filtered, scripted nominal actions, against a reference run on the same states: the bare
-   numpy work every step must do at least (x += dt u and one dense nearest-neighbour query).
+   numpy work every step must do at least (x += dt u and one dense nearest-neighbour query;
+   ``single_env_speed.py``).
+3. The same single-env ratio at N = 6 of the library as of ``--baseline`` (by default the last
+   commit before the batch-first core), timed in its own process against the same reference.
 
 Each figure is the best of ``--repeats`` alternating bursts (this machine's speed drifts).
 Writes ``benchmarks/results/env_speed.md``.
 
-    python benchmarks/env_speed.py [--seconds 1] [--repeats 5]
+    python benchmarks/env_speed.py [--seconds 1] [--repeats 5] [--baseline REV|none]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
+import subprocess
 import sys
-import time
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from single_env_speed import best, rates
 
-import rsvo_env
-import wrappers
 from rsvo_env.vector import BatchedEnv
 
 ROOT = Path(__file__).resolve().parents[1]
 BATCH_SIZES = ((4, 256), (16, 32), (16, 256), (64, 32))
-
-
-def rate(step: Callable[[], None], agents: int, seconds: float) -> float:
-    """Agent-steps per second of ``step`` over about ``seconds``."""
-    steps, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds:
-        step()
-        steps += 1
-    return agents * steps / (time.perf_counter() - t0)
-
-
-def best(makers: dict[str, Callable[[], tuple[Callable, int]]], seconds: float, repeats: int):
-    """Best rate of each named benchmark over ``repeats`` rounds, the benchmarks alternating."""
-    built = {name: make() for name, make in makers.items()}
-    for step, _ in built.values():
-        step()  # warm: numba compiles, caches fill
-    rates = {name: 0.0 for name in built}
-    for _ in range(repeats):
-        for name, (step, agents) in built.items():
-            rates[name] = max(rates[name], rate(step, agents, seconds))
-    return rates
+# the last commit before the batch-first core: "today" for the single env's speed-up
+BASELINE = "a2df9b8"
 
 
 def batched(n: int, e: int, seen: dict) -> tuple[Callable, int]:
@@ -89,49 +74,66 @@ def vmas_navigation(n: int, e: int) -> tuple[Callable, int]:
     return step, n * e
 
 
-def single(n: int, filtered: bool) -> tuple[Callable, int]:
-    env = rsvo_env.parallel_env("crowd", num_agents=n)
-    if filtered:
-        env = wrappers.RCBFSafetyFilter(env)
-    env.reset(seed=0)
-    base = env.unwrapped
+def baseline_rates(rev: str, seconds: float, repeats: int) -> dict[str, float]:
+    """:func:`single_env_speed.rates` at N = 6 of the library as of git revision ``rev``: a
+    detached worktree of ``rev`` first on the path of a fresh process running this checkout's
+    ``single_env_speed.py`` (so the reference is the same code)."""
+    script = Path(__file__).with_name("single_env_speed.py")
+    with tempfile.TemporaryDirectory() as tmp:
+        tree = Path(tmp) / "tree"
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree), rev],
+            check=True,
+            capture_output=True,
+        )
+        try:
+            out = subprocess.run(
+                [sys.executable, str(script), "--seconds", str(seconds), "--repeats",
+                 str(repeats)],
+                cwd=tmp,
+                env={**os.environ, "PYTHONPATH": str(tree)},
+                check=True,
+                capture_output=True,
+                text=True,
+            )  # fmt: skip
+        finally:
+            subprocess.run(
+                ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], check=True
+            )
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
-    def step() -> None:
-        if not env.agents:
-            env.reset()
-        env.step(base.nominal_actions())
 
-    return step, n
-
-
-def reference(n: int) -> tuple[Callable, int]:
-    """The bare numpy work of a step, frozen here so that the yardstick does not move with the
-    library: the Euler update and a dense nearest-neighbour query."""
-    env = rsvo_env.parallel_env("crowd", num_agents=n)
-    env.reset(seed=0)
-    state = {"x": env.unwrapped.world.positions.copy()}
-    u = env.unwrapped.nominal_controls()
-
-    def step() -> None:
-        x = state["x"] = state["x"] + 0.01 * u
-        if n <= 64:
-            diff = x[:, None, :] - x[None, :, :]
-            d2 = np.einsum("ijk,ijk->ij", diff, diff)
-            np.fill_diagonal(d2, np.inf)
-            idx = np.argsort(d2, axis=1, kind="stable")[:, :1]
-            np.sqrt(np.take_along_axis(d2, idx, axis=1))
-        else:
-            from scipy.spatial import cKDTree
-
-            cKDTree(x).query(x, k=2)
-
-    return step, n
+def baseline_section(rev: str, now: dict[str, float], seconds: float, repeats: int) -> list[str]:
+    """The single env at N = 6, then (``rev``) and now, each against the reference timed in its
+    own process."""
+    then = baseline_rates(rev, seconds, repeats)
+    lines = [
+        "",
+        f"## Single env at N = 6: before the batch-first core (commit `{rev}`) and now",
+        "",
+        f"The library as of `{rev}` (a detached worktree, in its own process) and this checkout,"
+        " each timed against the same frozen reference in its own process; the multiple is of"
+        " the ratios, so the machine's drift between the two processes cancels.",
+        "",
+        "| variant | then: env / reference | now: env / reference | now / then |",
+        "|---|---|---|---|",
+    ]
+    for name, label in (("bare", "bare env"), ("filtered", "filtered (RCBFSafetyFilter)")):
+        a, b = then[name] / then["reference"], now[name] / now["reference"]
+        lines.append(f"| {label} | {a:.3f} | {b:.3f} | {b / a:.1f}x |")
+        print(lines[-1], flush=True)
+    return lines
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--seconds", type=float, default=1.0, help="length of one burst")
     ap.add_argument("--repeats", type=int, default=5, help="bursts per benchmark")
+    ap.add_argument(
+        "--baseline",
+        default=BASELINE,
+        help="git revision whose single env is timed against the same reference ('none': skip)",
+    )
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "env_speed.md")
     args = ap.parse_args(argv)
     try:
@@ -187,22 +189,17 @@ def main(argv: list[str] | None = None) -> int:
         " env / reference |",
         "|---|---|---|---|---|---|",
     ]
+    now: dict[int, dict[str, float]] = {}
     for n in (6, 100, 1000):
-        r = best(
-            {
-                "reference": lambda n=n: reference(n),
-                "bare": lambda n=n: single(n, False),
-                "filtered": lambda n=n: single(n, True),
-            },
-            args.seconds,
-            args.repeats,
-        )
+        r = now[n] = rates(n, args.seconds, args.repeats)
         for name, label in (("bare", "bare env"), ("filtered", "filtered (RCBFSafetyFilter)")):
             lines.append(
                 f"| {n} | {label} | {r[name]:,.0f} | {n / r[name] * 1e6:,.0f} | "
                 f"{r['reference']:,.0f} | {r[name] / r['reference']:.3f} |"
             )
             print(lines[-1], flush=True)
+    if args.baseline != "none":
+        lines += baseline_section(args.baseline, now[6], args.seconds, args.repeats)
     lines.append("")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text("\n".join(lines))

@@ -1,11 +1,12 @@
 """Training throughput, in one process: PPO through the batched env against the single-env path.
 
 Both runs train the circular_swap residual config (6 agents, filter on, dt 0.1) with PPO, the
-same hyperparameters and the same rollout size (6144 agent-steps an update):
+same hyperparameters (``training/configs/circular_swap.yaml``) and the same rollout size (the
+config's ``n_steps`` x ``num_envs`` x 6 agent-steps an update):
 
-* batched: ``SB3VecEnv(BatchedEnv(num_envs=16))``, 96 slots, ``n_steps = 64``;
+* batched: ``SB3VecEnv(BatchedEnv(num_envs))``, one slot per agent, the config's ``n_steps``;
 * single: ``SB3VecEnv`` over one filtered ``RSVOParallelEnv`` with ``ResidualAction`` (PettingZoo
-  dicts, 6 slots), ``n_steps = 1024``.
+  dicts, 6 slots), ``n_steps`` times ``num_envs``.
 
 For each: agent-steps per second with the PPO updates included, and the share of wall time in
 the env step (filter included), in the filter stage alone, in the policy's forward passes
@@ -33,7 +34,11 @@ from training import config as configs
 from wrappers.sb3 import SB3VecEnv
 
 ROOT = Path(__file__).resolve().parents[1]
-ROLLOUT = 6144
+
+
+def rollout_size(cfg: dict[str, Any]) -> int:
+    """Agent-steps an update: the config's n_steps for every slot of its batched envs."""
+    return cfg["ppo"]["n_steps"] * cfg["num_envs"] * cfg["env"]["num_agents"]
 
 
 class Timer:
@@ -55,14 +60,24 @@ class Timer:
         return timed
 
 
+def hyper_note(cfg: dict[str, Any]) -> str:
+    """The PPO settings that set the update's cost, in words."""
+    ppo = cfg["ppo"]
+    kwargs = ppo.get("policy_kwargs") or {}
+    arch = "x".join(str(w) for w in kwargs.get("net_arch", [64, 64]))
+    act = kwargs.get("activation_fn", "tanh")
+    return f"{arch} {act} layers, {ppo['n_epochs']} epochs, minibatches of {ppo['batch_size']}"
+
+
 def run(path: str, updates: int) -> dict[str, float]:
     cfg = configs.resolve(configs.load("circular_swap"))
+    rollout = rollout_size(cfg)
     if path == "batched":
-        venv = SB3VecEnv(configs.make_env(cfg, num_envs=16))
+        venv = SB3VecEnv(configs.make_env(cfg, num_envs=cfg["num_envs"]))
     else:
         venv = SB3VecEnv(configs.make_parallel(cfg))
-    n_steps = ROLLOUT // venv.num_envs
-    hyper = {**cfg["ppo"], "n_steps": n_steps}
+    n_steps = rollout // venv.num_envs
+    hyper = {**configs.hyperparameters(cfg), "n_steps": n_steps}
     model = PPO("MlpPolicy", VecMonitor(venv), seed=0, verbose=0, **hyper)
     timer = Timer()
     venv.step_wait = timer.wrap("env", venv.step_wait)
@@ -73,13 +88,13 @@ def run(path: str, updates: int) -> dict[str, float]:
         model.learn(n_steps * venv.num_envs)  # first update: compiles, warms caches
         timer.seconds = dict.fromkeys(timer.seconds, 0.0)
         t0 = time.perf_counter()
-        model.learn(updates * ROLLOUT, reset_num_timesteps=False)
+        model.learn(updates * rollout, reset_num_timesteps=False)
         total = time.perf_counter() - t0
     finally:
         SafetyFilter.apply = original
     s = timer.seconds
     return {
-        "rate": updates * ROLLOUT / total,
+        "rate": updates * rollout / total,
         "env": s["env"] / total,
         "filter": s["filter"] / total,
         "update": s["update"] / total,
@@ -106,6 +121,7 @@ def main() -> int:
             if path not in best or r["rate"] > best[path]["rate"]:
                 best[path] = r
     ratio = best["batched"]["rate"] / best["single"]["rate"]
+    cfg = configs.resolve(configs.load("circular_swap"))
     lines = [
         "# Training throughput: PPO through the batched env vs the single-env path",
         "",
@@ -113,15 +129,16 @@ def main() -> int:
         f"--repeats {args.repeats}` on {platform.processor() or platform.machine()}, "
         f"Python {sys.version.split()[0]}, torch {torch.__version__}, one torch thread.",
         "",
-        "circular_swap residual config (6 agents, filter on, dt 0.1), PPO, 6144 agent-steps an "
-        "update, 5 epochs; best of the alternating runs. Shares are of wall time; the filter is "
-        "part of the env step.",
+        "circular_swap residual config (6 agents, filter on, dt 0.1), PPO "
+        f"({hyper_note(cfg)}), {rollout_size(cfg)} agent-steps an update; best of the "
+        "alternating runs. Shares are of wall time; the filter is part of the env step.",
         "",
         "| path | agent-steps/s (updates included) | env step | of which filter | policy "
         "forward | PPO update |",
         "|---|---|---|---|---|---|",
     ]
-    for path, label in (("batched", "BatchedEnv, 16 envs"), ("single", "one ParallelEnv")):
+    batched_label = f"BatchedEnv, {cfg['num_envs']} envs"
+    for path, label in (("batched", batched_label), ("single", "one ParallelEnv")):
         r = best[path]
         lines.append(
             f"| {label} | {r['rate']:.0f} | {r['env']:.0%} | {r['filter']:.0%} | "

@@ -198,9 +198,10 @@ class RSVOParallelEnv(ParallelEnv):
         columns = [list(v[0].copy()) if v.ndim == 3 else v[0].tolist() for v in signals.values()]
         episode = self.sim.metrics.flat_row(0)
         # every column has one entry per agent: zip needs no length check
+        rows = zip(*columns, strict=False)
         return {
-            a: dict(zip(keys, (*vals, *episode), strict=False))
-            for a, vals in zip(self.possible_agents, zip(*columns, strict=False), strict=False)
+            a: dict(zip(keys, vals + episode, strict=False))
+            for a, vals in zip(self.possible_agents, rows, strict=False)
         }
 
     # ---- scripted controller -----------------------------------------------------------------

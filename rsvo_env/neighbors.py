@@ -63,6 +63,15 @@ def _knn_dense(x, k, dist, idx):
                 dist[e, i, p] = np.sqrt(d2[p])
 
 
+@njit(cache=True)
+def _knn_dense_new(x, k):
+    """:func:`_knn_dense` with its outputs allocated here."""
+    dist = np.empty((x.shape[0], x.shape[1], k))
+    idx = np.empty((x.shape[0], x.shape[1], k), dtype=np.int64)
+    _knn_dense(x, k, dist, idx)
+    return dist, idx
+
+
 def nearest_neighbors(
     positions: NDArray[np.float64], k: int
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
@@ -76,11 +85,13 @@ def nearest_neighbors(
     k = min(k, n - 1)
     if k <= 0:
         return np.zeros((*lead, n, 0)), np.zeros((*lead, n, 0), dtype=np.int64)
-    flat = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, n, 2)
+    flat = np.asarray(positions, dtype=np.float64)
+    if flat.ndim != 3:
+        flat = flat.reshape(-1, n, 2)
     if n <= DENSE_MAX_AGENTS:
-        dist = np.empty((flat.shape[0], n, k))
-        idx = np.empty((flat.shape[0], n, k), dtype=np.int64)
-        _knn_dense(flat, k, dist, idx)
+        dist, idx = _knn_dense_new(flat, k)
+        if len(lead) == 1:
+            return dist, idx
         return dist.reshape(*lead, n, k), idx.reshape(*lead, n, k)
     E = flat.shape[0]
     shifted = (flat + env_offsets(flat)).reshape(-1, 2)

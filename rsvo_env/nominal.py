@@ -9,18 +9,26 @@ rotates the nominal clockwise by a fixed angle while a neighbour is within a tri
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env.planar import clip_norm, norm, rotate_where, toward
 
 
 def move_to_goal(
-    positions: NDArray[np.float64], goals: NDArray[np.float64], k: float, u_max: float
+    positions: NDArray[np.float64],
+    goals: NDArray[np.float64],
+    k: float,
+    u_max: float,
+    turn: NDArray[np.bool_] | None = None,
+    angle_deg: float = 0.0,
 ) -> NDArray[np.float64]:
-    """``u = -k (x - goal)``, scaled to norm <= u_max (paper, Sec. V-A)."""
-    return toward(positions, goals, k, u_max)
+    """``u = -k (x - goal)``, scaled to norm <= u_max (paper, Sec. V-A); with ``turn`` (...),
+    the :func:`right_hand_rule` applied in the same pass."""
+    return toward(positions, goals, k, u_max, turn, -np.deg2rad(angle_deg))
 
 
+@njit(cache=True)
 def right_hand_active(
     nearest: NDArray[np.float64], at_goal: NDArray[np.bool_], trigger: float
 ) -> NDArray[np.bool_]:

@@ -212,10 +212,10 @@ class SafetyFilter:
         """
         cfg = self.config
         E, n = theta.shape
-        pos = positions.reshape(E * n, 2)
         dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
         if dense and not with_rows and cfg.solver == "exact" and cfg.dynamics == DYNAMICS[0]:
             return self._apply_dense(positions, nominal, theta, omega)
+        pos = positions.reshape(E * n, 2)
         reach = None
         if dense:
             # Few agents: every pair, and exact culling drops the rows that cannot bind.

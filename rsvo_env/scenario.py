@@ -17,7 +17,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env import nominal
-from rsvo_env.planar import norm
+from rsvo_env.planar import within
 from rsvo_env.validation import check_positive, check_real, check_theta, real_array
 
 COMMON_DEFAULTS: dict[str, Any] = {
@@ -172,10 +172,16 @@ class Scenario:
     def nominal(self, state: Any, right_hand: bool = True) -> NDArray[np.float64]:
         """Scripted nominal controls (E, N, 2) in physical units: move-to-goal (paper, Sec. V-A)
         plus the right-hand rule (unless ``right_hand`` is False)."""
-        u = nominal.move_to_goal(state.positions, state.goals, self.params["k"], self.u_max)
-        if right_hand and self.params["deadlock_resolution"] == "right_hand":
-            u = nominal.right_hand_rule(u, state.rh_active, self.params["rh_angle_deg"])
-        return u
+        p = self.params
+        turn = right_hand and p["deadlock_resolution"] == "right_hand"
+        return nominal.move_to_goal(
+            state.positions,
+            state.goals,
+            p["k"],
+            self.u_max,
+            state.rh_active if turn else None,
+            p["rh_angle_deg"],
+        )
 
     def right_hand_active(self, state: Any) -> NDArray[np.bool_]:
         """(E, N): agents whose nominal the right-hand rule turns (always False without it), from
@@ -193,17 +199,17 @@ class Scenario:
         weights: tuple[float, float, float],
     ) -> NDArray[np.float64]:
         """Per-agent reward (E, N): progress toward the goal, a time cost, a goal bonus once."""
-        shape = first_arrival.shape
-        out = np.empty(int(np.prod(shape)))
+        out = np.empty(first_arrival.shape)
+        # reshape copies only what is not contiguous already
         _reward_terms(
-            np.ascontiguousarray(before).reshape(-1, 2),
-            np.ascontiguousarray(after).reshape(-1, 2),
-            np.ascontiguousarray(goals).reshape(-1, 2),
-            np.ascontiguousarray(first_arrival).reshape(-1),
+            before.reshape(-1, 2),
+            after.reshape(-1, 2),
+            goals.reshape(-1, 2),
+            first_arrival.reshape(-1),
             *weights,
-            out,
+            out.reshape(-1),
         )
-        return out.reshape(shape)
+        return out
 
     @property
     def rh_trigger(self) -> float:
@@ -214,4 +220,4 @@ class Scenario:
 
     def at_goal(self, positions: NDArray, goals: NDArray) -> NDArray[np.bool_]:
         """(..., N): agents within ``goal_tolerance`` of their goals."""
-        return norm(positions - goals) <= self.params["goal_tolerance"]
+        return within(positions, goals, self.params["goal_tolerance"])

@@ -9,7 +9,17 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
+
+
+@njit(cache=True)
+def all_finite(a: NDArray) -> bool:
+    """Whether every entry of a real array is finite (``np.isfinite(a).all()`` in one pass)."""
+    for v in a.flat:
+        if not np.isfinite(v):
+            return False
+    return True
 
 
 def _label(index: int, names: Sequence[str] | None) -> str:
@@ -122,7 +132,7 @@ def check_action_dict(
         or out is None
         or out.dtype.kind not in "uif"
         or out.shape != (len(agents),) + shape
-        or not np.isfinite(out).all()
+        or not all_finite(out)
     ):
         for agent in agents:
             check_action(actions[agent], agent, shape)

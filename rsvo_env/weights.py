@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env.pairs import Floor, floor_of, weight_floor
@@ -25,6 +26,16 @@ from rsvo_env.responsibility import (
 
 # Agents an env up to which the weight matrix is kept (8 MB per env at 1,024).
 DENSE_MAX = 1024
+
+
+@njit(cache=True)
+def _gather(matrix, nb, out):
+    """``out[e, i, k] = matrix[e, i, nb[e, i, k]]`` (a take_along_axis without its set-up)."""
+    E, n, K = nb.shape
+    for e in range(E):
+        for i in range(n):
+            for k in range(K):
+                out[e, i, k] = matrix[e, i, nb[e, i, k]]
 
 
 class Weights:
@@ -64,7 +75,9 @@ class Weights:
         """(E', N, K) weight of each agent against each of its listed neighbours ``nb`` (local
         indices) in envs ``pick``: entries of the matrix, or the same numbers from the scores."""
         if self.matrix is not None:
-            return np.take_along_axis(self.matrix[pick], nb, axis=2)
+            out = np.empty(nb.shape)
+            _gather(self.matrix[pick], nb, out)
+            return out
         th = theta[pick]
         tj = np.take_along_axis(th[:, None, :], nb, axis=2)
         ti = np.broadcast_to(th[:, :, None], nb.shape)

@@ -73,6 +73,24 @@ def test_nominal_episode_is_deterministic_to_the_end():
     assert "episode" not in last and last["episode_steps"] == len(a)
 
 
+def test_per_agent_episode_values_are_the_batched_flat_values():
+    """The single env's per-agent ``episode_*`` infos hold the same values and types as the
+    core's (E,) ``flat()`` arrays, at every step of an episode with collisions and arrivals."""
+    from rsvo_env.metrics import FLAT_FIELDS
+
+    env = rsvo_env.parallel_env("position_swap", theta=(1.0, 1.0))
+    env.reset(seed=0)
+    while env.agents:
+        infos = env.step(env.unwrapped.nominal_actions())[4]
+        flat = env.unwrapped.sim.metrics.flat()
+        for name, dtype in FLAT_FIELDS:
+            got = infos["agent_1"][f"episode_{name}"]
+            want = flat[f"episode_{name}"][0]
+            assert got == want and type(got) is type(dtype(want).item()), name
+    assert infos["agent_0"]["episode_collision_steps"] > 0
+    assert infos["agent_0"]["episode_success"] is True
+
+
 def test_seeds_change_crowd_layouts():
     env = rsvo_env.parallel_env("crowd", num_agents=10)
     env.reset(seed=1)

@@ -10,6 +10,7 @@ import yaml
 from training import config as configs
 from training import evaluate, train
 from training.evaluation import run_episodes, scripted_policy
+from wrappers.sb3 import SB3VecEnv
 
 SMALL = [
     "--scenario", "circular_swap", "--set", "env.num_agents=4", "--num-envs", "2",
@@ -73,6 +74,7 @@ def test_time_limit_stops_training_and_saves(tmp_path):
         (["--scenario", "nowhere"], ["nowhere", "circular_swap"]),
         (["--time-limit", "0"], ["time-limit"]),
         (["--timesteps", "0"], ["timesteps", "0"]),
+        (["--set", "ppo.policy_kwargs.activation_fn=gelu"], ["activation_fn", "gelu", "relu"]),
     ],
 )
 def test_bad_configs_fail_before_training_naming_the_field(tmp_path, capsys, extra, words):
@@ -122,7 +124,10 @@ def test_readme_states_the_circular_config_as_it_is():
     env = cfg["env"]
     assert "(dt 0.1 s, γ 10, a 30 s time cap)" in text
     assert (env["dt"], env["gamma"], env["max_steps"] * env["dt"]) == (0.1, 10.0, 30.0)
-    assert "each agent of 16 batched envs" in text and cfg["num_envs"] == 16
+    assert "agent of 32 batched envs" in text and cfg["num_envs"] == 32
+    policy = cfg["ppo"]["policy_kwargs"]
+    assert "two ReLU layers of 64" in text
+    assert policy["net_arch"] == [64, 64] and policy["activation_fn"] == "relu"
     assert "U(1, 10)" in text and env["theta_range"] == [1.0, 10.0] and env["random_rotation"]
     assert "6 M agent-steps" in text and cfg["timesteps"] == 6_000_000
     assert env["frame"] == "goal" and cfg["action"] == "residual" and cfg["algo"] == "ppo"
@@ -136,3 +141,17 @@ def test_sac_trains_and_evaluates_through_the_same_entry_points(tmp_path):
     assert evaluate.main([str(run / "model.zip"), "--episodes", "2", "--seed", "3"]) == 0
     report = json.loads((run / "evaluation.json").read_text())
     assert report["policy"]["collisions"] == 0 and report["policy"]["episodes"] == 2
+
+
+def test_a_named_activation_reaches_the_policy():
+    import torch
+    from stable_baselines3 import PPO
+
+    cfg = configs.resolve(configs.load("circular_swap"), num_envs=1)
+    hyper = configs.hyperparameters(cfg)
+    assert hyper["policy_kwargs"]["activation_fn"] is torch.nn.ReLU
+    assert cfg["ppo"]["policy_kwargs"]["activation_fn"] == "relu"  # the config keeps its name
+    venv = SB3VecEnv(configs.make_env(cfg, num_envs=1))
+    model = PPO("MlpPolicy", venv, **hyper)
+    layers = list(model.policy.mlp_extractor.policy_net)
+    assert [type(m) for m in layers] == [torch.nn.Linear, torch.nn.ReLU] * 2

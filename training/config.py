@@ -26,6 +26,8 @@ TOP_KEYS = {
     "engine", "rllib",
 }  # fmt: skip
 ENGINES = ("sb3", "rllib")
+# the activations a config may name for an SB3 policy (``policy_kwargs.activation_fn``)
+ACTIVATIONS = ("tanh", "relu")
 
 
 def load(scenario: str | None = None, path: str | Path | None = None) -> dict[str, Any]:
@@ -83,6 +85,8 @@ def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
         raise ValueError(f"config algo = {out['algo']!r}: the rllib engine trains ppo")
     if not isinstance(out.get(section), dict):
         raise ValueError(f"config has no {section!r} section of hyperparameters")
+    if out["engine"] == "sb3":
+        hyperparameters(out)
     # build one env now: every scenario, filter and observation field is checked by the env
     env = make_env(out, num_envs=1)
     gamma, dt = env.sim.filters[0].config.gamma, env.scenario.params["dt"]
@@ -97,6 +101,24 @@ def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
     val.setdefault("seed", 900_000)
     out.setdefault("checkpoint_every", 0)
     return out
+
+
+def hyperparameters(cfg: dict[str, Any]) -> dict[str, Any]:
+    """The keyword arguments of the SB3 algorithm ``cfg["algo"]``, with a named activation
+    (``policy_kwargs.activation_fn: relu``) turned into its torch module class."""
+    import torch
+
+    hyper = copy.deepcopy(cfg[cfg["algo"]])
+    kwargs = hyper.get("policy_kwargs") or {}
+    name = kwargs.get("activation_fn")
+    if name is not None:
+        if name not in ACTIVATIONS:
+            raise ValueError(
+                f"config {cfg['algo']}.policy_kwargs.activation_fn = {name!r}; use one of "
+                f"{ACTIVATIONS}"
+            )
+        kwargs["activation_fn"] = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[name]
+    return hyper
 
 
 def make_env(

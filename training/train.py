@@ -98,7 +98,7 @@ def train(
     batched = configs.make_env(cfg, num_envs=cfg["num_envs"])
     venv = VecMonitor(SB3VecEnv(batched))
     algo = {"ppo": PPO, "sac": SAC}[cfg["algo"]]
-    model = algo("MlpPolicy", venv, seed=cfg["seed"], verbose=0, **cfg[cfg["algo"]])
+    model = algo("MlpPolicy", venv, seed=cfg["seed"], verbose=0, **configs.hyperparameters(cfg))
     model.set_logger(configure(str(out), ["csv", "tensorboard"] + (["stdout"] if verbose else [])))
     slots = venv.num_envs
     limit = TimeLimit(time_limit)

@@ -59,6 +59,22 @@ def _serial(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, 
         )  # fmt: skip
 
 
+@njit(cache=True)
+def _serial_new(x, nom, omega, gamma, R2, lo, hi):
+    """:func:`_serial` with its outputs allocated here: one compiled call for a small scene."""
+    E, n = x.shape[0], x.shape[1]
+    out = np.empty((E, n, 2))
+    feasible = np.empty((E, n), dtype=np.bool_)
+    active = np.empty((E, n), dtype=np.int64)
+    violation = np.empty((E, n))
+    n_rows = np.empty((E, n), dtype=np.int64)
+    min_h = np.empty(E)
+    moved = np.empty((E, n))
+    _serial(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, n_rows, min_h,
+            moved)  # fmt: skip
+    return out, feasible, active, violation, n_rows, min_h, moved
+
+
 @njit(cache=True, parallel=True)
 def _parallel(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, n_rows, min_h,
               moved):  # fmt: skip
@@ -86,6 +102,16 @@ def filter_dense(
     smallest barrier value (E,), and the intervention |u_safe - u_nominal| (E, N).
     """
     E, n = positions.shape[:2]
+    if E * n < PARALLEL_THRESHOLD:
+        return _serial_new(
+            np.asarray(positions, dtype=np.float64),
+            np.asarray(nominal, dtype=np.float64),
+            np.asarray(omega, dtype=np.float64),
+            float(gamma),
+            float(safety_radius) ** 2,
+            np.asarray(lo, dtype=np.float64),
+            np.asarray(hi, dtype=np.float64),
+        )
     out = np.empty((E, n, 2))
     feasible = np.empty((E, n), dtype=np.bool_)
     active = np.empty((E, n), dtype=np.int64)
@@ -93,8 +119,7 @@ def filter_dense(
     n_rows = np.empty((E, n), dtype=np.int64)
     min_h = np.empty(E)
     moved = np.empty((E, n))
-    kernel = _parallel if E * n >= PARALLEL_THRESHOLD else _serial
-    kernel(
+    _parallel(
         np.ascontiguousarray(positions, dtype=np.float64),
         np.ascontiguousarray(nominal, dtype=np.float64),
         np.ascontiguousarray(omega, dtype=np.float64),

@@ -1,0 +1,115 @@
+"""The single env's step cost against a frozen numpy reference, timed in one process.
+
+``single(n, filtered)`` steps one ``RSVOParallelEnv`` of ``crowd`` (PettingZoo dicts, scripted
+nominal actions computed every step, episodes reset as they end), with or without
+``RCBFSafetyFilter``; ``reference(n)`` is the bare numpy work every step must do at least
+(x += dt u and one dense nearest-neighbour query, a KD-tree above 64 agents), frozen here so the
+yardstick does not move with the library.
+
+This module imports only ``rsvo_env`` and ``wrappers`` through the API they have had since the
+first milestone, so ``benchmarks/env_speed.py --baseline REV`` runs it on an older checkout of the
+library too: each run's ratio is against the same reference, timed in that run's own process.
+
+    python benchmarks/single_env_speed.py [--agents 6] [--seconds 1] [--repeats 5]
+
+prints one JSON line: agent-steps per second of ``bare``, ``filtered`` and ``reference``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+import rsvo_env
+import wrappers
+
+
+def rate(step: Callable[[], None], agents: int, seconds: float) -> float:
+    """Agent-steps per second of ``step`` over about ``seconds``."""
+    steps, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < seconds:
+        step()
+        steps += 1
+    return agents * steps / (time.perf_counter() - t0)
+
+
+def best(makers: dict[str, Callable[[], tuple[Callable, int]]], seconds: float, repeats: int):
+    """Best rate of each named benchmark over ``repeats`` rounds, the benchmarks alternating."""
+    built = {name: make() for name, make in makers.items()}
+    for step, _ in built.values():
+        step()  # warm: numba compiles, caches fill
+    rates = {name: 0.0 for name in built}
+    for _ in range(repeats):
+        for name, (step, agents) in built.items():
+            rates[name] = max(rates[name], rate(step, agents, seconds))
+    return rates
+
+
+def single(n: int, filtered: bool) -> tuple[Callable, int]:
+    env = rsvo_env.parallel_env("crowd", num_agents=n)
+    if filtered:
+        env = wrappers.RCBFSafetyFilter(env)
+    env.reset(seed=0)
+    base = env.unwrapped
+
+    def step() -> None:
+        if not env.agents:
+            env.reset()
+        env.step(base.nominal_actions())
+
+    return step, n
+
+
+def reference(n: int) -> tuple[Callable, int]:
+    """The bare numpy work of a step: the Euler update and a dense nearest-neighbour query."""
+    env = rsvo_env.parallel_env("crowd", num_agents=n)
+    env.reset(seed=0)
+    state = {"x": env.unwrapped.world.positions.copy()}
+    u = env.unwrapped.nominal_controls()
+
+    def step() -> None:
+        x = state["x"] = state["x"] + 0.01 * u
+        if n <= 64:
+            diff = x[:, None, :] - x[None, :, :]
+            d2 = np.einsum("ijk,ijk->ij", diff, diff)
+            np.fill_diagonal(d2, np.inf)
+            idx = np.argsort(d2, axis=1, kind="stable")[:, :1]
+            np.sqrt(np.take_along_axis(d2, idx, axis=1))
+        else:
+            from scipy.spatial import cKDTree
+
+            cKDTree(x).query(x, k=2)
+
+    return step, n
+
+
+def rates(n: int, seconds: float, repeats: int) -> dict[str, float]:
+    """Agent-steps per second of the bare env, the filtered env and the reference, at n agents."""
+    return best(
+        {
+            "reference": lambda: reference(n),
+            "bare": lambda: single(n, False),
+            "filtered": lambda: single(n, True),
+        },
+        seconds,
+        repeats,
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--agents", type=int, default=6)
+    ap.add_argument("--seconds", type=float, default=1.0, help="length of one burst")
+    ap.add_argument("--repeats", type=int, default=5, help="bursts per benchmark")
+    args = ap.parse_args(argv)
+    print(json.dumps(rates(args.agents, args.seconds, args.repeats)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
