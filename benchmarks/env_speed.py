@@ -1,4 +1,4 @@
-"""Env step cost, in one process: the batched env against VMAS, the single env against numpy.
+"""Env step cost: the batched env against VMAS, the single env against numpy.
 
 1. ``BatchedEnv("crowd")`` with the filter, scripted nominal actions, at (N, E) in {(4, 256),
    (16, 32), (16, 256), (64, 32)}: agent-steps per second and the smallest distance seen; and
@@ -7,7 +7,8 @@
 2. The single ``RSVOParallelEnv`` (PettingZoo dicts) of ``crowd`` at N = 6, 100, 1000, bare and
    filtered, scripted nominal actions, against a reference run on the same states: the bare
    numpy work every step must do at least (x += dt u and one dense nearest-neighbour query;
-   ``single_env_speed.py``).
+   ``single_env_speed.py``, run in a process of its own so that VMAS's torch threads are not
+   beside it; the ratio is within that process).
 3. The same single-env ratio at N = 6 of the library as of ``--baseline`` (by default the last
    commit before the batch-first core), timed in its own process against the same reference.
 
@@ -30,7 +31,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from single_env_speed import best, rates
+from single_env_speed import best
 
 from rsvo_env.vector import BatchedEnv
 
@@ -74,11 +75,25 @@ def vmas_navigation(n: int, e: int) -> tuple[Callable, int]:
     return step, n * e
 
 
-def baseline_rates(rev: str, seconds: float, repeats: int) -> dict[str, float]:
-    """:func:`single_env_speed.rates` at N = 6 of the library as of git revision ``rev``: a
-    detached worktree of ``rev`` first on the path of a fresh process running this checkout's
-    ``single_env_speed.py`` (so the reference is the same code)."""
+def process_rates(tree: Path, n: int, seconds: float, repeats: int) -> dict[str, float]:
+    """:func:`single_env_speed.rates` at n agents in a fresh process with the library of
+    ``tree`` first on its path; the reference is this checkout's code either way."""
     script = Path(__file__).with_name("single_env_speed.py")
+    out = subprocess.run(
+        [sys.executable, str(script), "--agents", str(n), "--seconds", str(seconds),
+         "--repeats", str(repeats)],
+        cwd=tree.parent,
+        env={**os.environ, "PYTHONPATH": str(tree)},
+        check=True,
+        capture_output=True,
+        text=True,
+    )  # fmt: skip
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def baseline_rates(rev: str, seconds: float, repeats: int) -> dict[str, float]:
+    """:func:`process_rates` at N = 6 of the library as of git revision ``rev`` (a detached
+    worktree)."""
     with tempfile.TemporaryDirectory() as tmp:
         tree = Path(tmp) / "tree"
         subprocess.run(
@@ -87,20 +102,11 @@ def baseline_rates(rev: str, seconds: float, repeats: int) -> dict[str, float]:
             capture_output=True,
         )
         try:
-            out = subprocess.run(
-                [sys.executable, str(script), "--seconds", str(seconds), "--repeats",
-                 str(repeats)],
-                cwd=tmp,
-                env={**os.environ, "PYTHONPATH": str(tree)},
-                check=True,
-                capture_output=True,
-                text=True,
-            )  # fmt: skip
+            return process_rates(tree, 6, seconds, repeats)
         finally:
             subprocess.run(
                 ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], check=True
             )
-    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def baseline_section(rev: str, now: dict[str, float], seconds: float, repeats: int) -> list[str]:
@@ -150,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
     lines = [
         "# Env step cost",
         "",
-        f"Written by `python benchmarks/env_speed.py` in one process ({platform.machine()}, "
+        f"Written by `python benchmarks/env_speed.py` ({platform.machine()}, "
         f"{os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}; "
         f"{vmas_note}). Each figure is the best of {args.repeats} alternating bursts of "
         f"{args.seconds:g} s.",
@@ -182,8 +188,9 @@ def main(argv: list[str] | None = None) -> int:
         "## Single env (`RSVOParallelEnv`, PettingZoo dicts) against its numpy reference",
         "",
         "Reference: x += dt u plus one dense nearest-neighbour query (a KD-tree above 64 agents)"
-        " on the same agents. Scripted nominal actions computed every step, episodes reset as"
-        " they end.",
+        " on the same agents, timed in the same process as the env (one process per N, apart"
+        " from the batched runs above). Scripted nominal actions computed every step, episodes"
+        " reset as they end.",
         "",
         "| N | variant | agent-steps/s | µs per env step | reference agent-steps/s |"
         " env / reference |",
@@ -191,7 +198,8 @@ def main(argv: list[str] | None = None) -> int:
     ]
     now: dict[int, dict[str, float]] = {}
     for n in (6, 100, 1000):
-        r = now[n] = rates(n, args.seconds, args.repeats)
+        # a process of its own, as the baseline's: no VMAS or torch threads beside it
+        r = now[n] = process_rates(ROOT, n, args.seconds, args.repeats)
         for name, label in (("bare", "bare env"), ("filtered", "filtered (RCBFSafetyFilter)")):
             lines.append(
                 f"| {n} | {label} | {r[name]:,.0f} | {n / r[name] * 1e6:,.0f} | "

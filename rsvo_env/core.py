@@ -21,7 +21,7 @@ import numpy as np
 from gymnasium.utils import seeding
 from numpy.typing import NDArray
 
-from rsvo_env import dynamics, observation, planar
+from rsvo_env import dynamics, observation, planar, post_step
 from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_neighbors
 from rsvo_env.pairs import Floor
@@ -109,6 +109,8 @@ class Simulator:
             self.num_envs, n, self.dt, self.safety_radius, record_series=record_series
         )
         self.limits = observation.limits_for(scenario)
+        # the after-integration stage in one compiled call where the scenario allows it
+        self.fused_post_step = post_step.fusable(scenario, n)
 
     def spaces(self) -> tuple[gymnasium.spaces.Box, gymnasium.spaces.Box]:
         """One agent's observation and action spaces (bounded Boxes, float32)."""
@@ -220,12 +222,7 @@ class Simulator:
     def _derive(self) -> None:
         """What follows from the current positions, once per state: the nearest distance, the K
         nearest neighbours, who is at its goal and whom the right-hand rule turns."""
-        s = self.state
-        d, idx = nearest_neighbors(s.positions, max(self.k, 1))
-        s.nearest = d[..., 0]
-        s.neighbors = idx[..., : self.k]
-        s.at_goal = self.scenario.at_goal(s.positions, s.goals)
-        s.rh_active = self.scenario.right_hand_active(s)
+        post_step.derive(self)
 
     def set_residual(
         self, gate_radius: float | None, right_hand: bool = True, scale: float = 1.0
@@ -320,22 +317,14 @@ class Simulator:
         else:
             s.positions = dynamics.single_integrator_step(s.positions, u, self.dt)
             s.velocities = u.copy()
-        self._derive()
-        at_goal, rh = s.at_goal, s.rh_active
-        self.metrics.update(
-            before, s.positions, s.starts, s.goals, s.nearest, rh, at_goal, u_nominal, u, stats
-        )
-        first_arrival = at_goal & ~s.reached
-        s.reached |= at_goal
-        reward = sc.reward(before, s.positions, s.goals, first_arrival, self.reward_weights)
+        after = post_step.fused if self.fused_post_step else post_step.by_hooks
+        reward, terminated, truncated = after(self, before, u_nominal, u, stats)
         penalty = sum(self.penalties)
         if penalty:
             reward = reward - penalty * intervention**2
         if self.reward_team:
             # each agent also shares its env's mean reward (the reward_team share of it)
             reward = reward + self.reward_team * (reward.mean(-1, keepdims=True) - reward)
-        terminated = at_goal.all(axis=-1)
-        truncated = ~terminated & (self.metrics.steps >= self.max_steps)
         signals = self.signals(u_nominal, u, intervention, stats)
         return self.observe(), reward, terminated, truncated, signals
 
@@ -350,15 +339,22 @@ class Simulator:
         zero, no filter work) and at every step."""
         s = self.state
         E, n = s.theta.shape
-        zeros2 = np.zeros((E, n, 2))
-        stats = stats or {}
+        if u_nominal is None or u_safe is None or intervention is None:
+            u_nominal = u_safe = np.zeros((E, n, 2))
+            intervention = np.zeros((E, n))
+        if stats is None:  # no filter work: feasible, nothing active, no violation
+            stats = {
+                "feasible": np.ones((E, n), dtype=bool),
+                "active": np.zeros((E, n), dtype=np.int64),
+                "max_violation": np.zeros((E, n)),
+            }
         return {
-            "u_nominal": zeros2 if u_nominal is None else u_nominal,
-            "u_safe": zeros2 if u_safe is None else u_safe,
-            "intervention": np.zeros((E, n)) if intervention is None else intervention,
-            "feasible": stats.get("feasible", np.ones((E, n), dtype=bool)),
-            "active_constraints": stats.get("active", np.zeros((E, n), dtype=np.int64)),
-            "max_violation": stats.get("max_violation", np.zeros((E, n))),
+            "u_nominal": u_nominal,
+            "u_safe": u_safe,
+            "intervention": intervention,
+            "feasible": stats["feasible"],
+            "active_constraints": stats["active"],
+            "max_violation": stats["max_violation"],
             "min_distance": s.nearest,
             "cost": collided(s.nearest, self.safety_radius).astype(np.float64),
             "at_goal": s.at_goal,

@@ -213,7 +213,9 @@ class RSVOParallelEnv(ParallelEnv):
 
     def nominal_actions(self) -> dict[str, NDArray[np.float32]]:
         """The scripted move-to-goal (+ right-hand rule, or lane following) as env actions."""
-        a = self.control_to_action(self.nominal_controls()).astype(np.float32)
+        if not self._started:
+            raise RuntimeError("call reset() first")
+        a = self.sim.to_actions(self.sim.nominal_controls())[0].astype(np.float32)
         return dict(zip(self.possible_agents, a, strict=True))
 
     def action_to_control(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:

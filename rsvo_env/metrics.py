@@ -111,6 +111,8 @@ class EpisodeMetrics:
             raise ValueError("record_series needs num_envs = 1")
         self.num_envs, self.n, self.dt, self.safety_radius = num_envs, n, dt, safety_radius
         self.record_series = record_series
+        # a nearest distance below this is a collision step
+        self.collision_below = safety_radius * (1.0 - COLLISION_TOL)
         E = num_envs
         self.counts = np.zeros((E, 5), dtype=np.int64)
         self.min_distance = np.full(E, np.inf)
@@ -128,7 +130,8 @@ class EpisodeMetrics:
         self.collision_steps = self.counts[:, 4]
         self.path_length = self.sums[..., 0]
         self.deviation = self.sums[..., 1]
-        self._series = np.zeros((E, 2))
+        # the last step's smallest and mean nearest distance of each env
+        self.step_series = np.zeros((E, 2))
         self.min_distance_series: list[float] = []
         self.avg_min_distance_series: list[float] = []
 
@@ -164,12 +167,7 @@ class EpisodeMetrics:
     ) -> None:
         """Record one more step of every env (arrays (E, N, ...)): positions before and after,
         the state's derived signals, the requested and the applied controls, the filter's stats."""
-        if filter_stats is None:
-            feasible, min_h = _NO_FEASIBLE, _NO_MIN_H
-        else:
-            feasible, min_h = filter_stats["feasible"], filter_stats["min_h"]
-            self.unrecoverable_pairs += filter_stats["n_unrecoverable_pairs"]
-            self.capped_shares += filter_stats["n_capped_shares"]
+        feasible, min_h = self.begin(filter_stats)
         _accumulate(
             self.counts,
             self.min_distance,
@@ -189,12 +187,25 @@ class EpisodeMetrics:
             feasible,
             min_h,
             self.dt,
-            self.safety_radius * (1.0 - COLLISION_TOL),
-            self._series,
+            self.collision_below,
+            self.step_series,
         )
+        self.end()
+
+    def begin(self, filter_stats: dict[str, Any] | None) -> tuple[NDArray, NDArray]:
+        """The part of :meth:`update` before its kernel (``_accumulate``): the filter's counts
+        added; returns the kernel's ``feasible`` and ``min_h`` arguments."""
+        if filter_stats is None:
+            return _NO_FEASIBLE, _NO_MIN_H
+        self.unrecoverable_pairs += filter_stats["n_unrecoverable_pairs"]
+        self.capped_shares += filter_stats["n_capped_shares"]
+        return filter_stats["feasible"], filter_stats["min_h"]
+
+    def end(self) -> None:
+        """The part of :meth:`update` after its kernel: the per-step series, when recorded."""
         if self.record_series:
-            self.min_distance_series.append(float(self._series[0, 0]))
-            self.avg_min_distance_series.append(float(self._series[0, 1]))
+            self.min_distance_series.append(float(self.step_series[0, 0]))
+            self.avg_min_distance_series.append(float(self.step_series[0, 1]))
 
     def _flat_values(self) -> dict[str, NDArray]:
         return {

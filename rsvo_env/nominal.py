@@ -8,11 +8,13 @@ rotates the nominal clockwise by a fixed angle while a neighbour is within a tri
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env.planar import clip_norm, norm, rotate_where, toward
+from rsvo_env.planar import clip_norm, norm, toward
 
 
 def move_to_goal(
@@ -24,8 +26,9 @@ def move_to_goal(
     angle_deg: float = 0.0,
 ) -> NDArray[np.float64]:
     """``u = -k (x - goal)``, scaled to norm <= u_max (paper, Sec. V-A); with ``turn`` (...),
-    the :func:`right_hand_rule` applied in the same pass."""
-    return toward(positions, goals, k, u_max, turn, -np.deg2rad(angle_deg))
+    the right-hand rule in the same pass: the rows where it is set turned clockwise by
+    ``angle_deg``."""
+    return toward(positions, goals, k, u_max, turn, -math.radians(angle_deg))
 
 
 @njit(cache=True)
@@ -35,13 +38,6 @@ def right_hand_active(
     """Agents for which the right-hand rule fires: the nearest neighbour closer than
     ``trigger``, and the agent not at its goal (arrays (..., N))."""
     return (nearest < trigger) & ~at_goal
-
-
-def right_hand_rule(
-    u: NDArray[np.float64], active: NDArray[np.bool_], angle_deg: float
-) -> NDArray[np.float64]:
-    """Rotate the nominal of the active agents clockwise by ``angle_deg``."""
-    return rotate_where(u, active, -np.deg2rad(angle_deg))
 
 
 def lane_following(

@@ -70,9 +70,13 @@ NEIGHBOR_FEATURES = (
 )
 
 
+OWN_WIDTH = sum(f.width for f in OWN_FEATURES)
+NEIGHBOR_WIDTH = sum(f.width for f in NEIGHBOR_FEATURES)
+
+
 def size(k: int) -> int:
     """Length D of one agent's observation with K neighbours."""
-    return sum(f.width for f in OWN_FEATURES) + k * sum(f.width for f in NEIGHBOR_FEATURES)
+    return OWN_WIDTH + k * NEIGHBOR_WIDTH
 
 
 def bounds(limits: Limits, k: int) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
@@ -150,14 +154,15 @@ def observe(
     out = np.empty((E, n, size(K)), dtype=np.float32)
     use_frame = frame_angle is not None
     angle = frame_angle if use_frame else np.zeros((E, n))
+    # the kernel indexes any layout: no contiguous copies
     _observe(
-        np.ascontiguousarray(positions),
-        np.ascontiguousarray(velocities),
-        np.ascontiguousarray(goals),
-        np.ascontiguousarray(theta),
-        np.ascontiguousarray(neighbor_omega),
-        np.ascontiguousarray(neighbors),
-        np.ascontiguousarray(angle),
+        positions,
+        velocities,
+        goals,
+        theta,
+        neighbor_omega,
+        neighbors,
+        angle,
         use_frame,
         float(safety_radius),
         out,

@@ -59,30 +59,9 @@ def _clip(flat, limit, scale, out):
         out[i, 0], out[i, 1] = x * scale, y * scale
 
 
-@njit(cache=True)
-def _turn(flat, active, c, s, out):
-    for i in range(flat.shape[0]):
-        x, y = flat[i, 0], flat[i, 1]
-        if active[i]:
-            out[i, 0], out[i, 1] = c * x - s * y, s * x + c * y
-        else:
-            out[i, 0], out[i, 1] = x, y
-
-
 @functools.lru_cache(maxsize=32)
 def _cos_sin(angle: float) -> tuple[float, float]:
     return float(np.cos(angle)), float(np.sin(angle))
-
-
-def rotate_where(
-    u: NDArray[np.float64], active: NDArray[np.bool_], angle: float
-) -> NDArray[np.float64]:
-    """Rotate the rows of u (..., 2) where ``active`` (...) by one fixed ``angle``."""
-    c, s = _cos_sin(float(angle))
-    flat = np.ascontiguousarray(u, dtype=np.float64).reshape(-1, 2)
-    out = np.empty_like(flat)
-    _turn(flat, np.ascontiguousarray(active).reshape(-1), c, s, out)
-    return out.reshape(np.shape(u))
 
 
 @njit(cache=True)
@@ -113,7 +92,7 @@ def toward(
     angle: float = 0.0,
 ) -> NDArray[np.float64]:
     """``-k (x - goal)`` per row, clipped to norm <= limit; then the rows where ``turn`` (...)
-    is set rotated by ``angle`` radians (the same arithmetic as :func:`rotate_where`)."""
+    is set rotated by ``angle`` radians (the right-hand rule's turn)."""
     x = _rows(positions, positions.shape)
     g = _rows(goals, positions.shape)
     out = np.empty_like(x)

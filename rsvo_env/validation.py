@@ -110,8 +110,10 @@ def check_action_dict(
     """
     if not isinstance(actions, dict):
         raise ValueError(f"actions must be a dict keyed by agent name, got {type(actions)!r}")
-    live = set(agents)
-    if len(actions) != len(live) or not live.issuperset(actions):
+    # as many keys as live agents, each of them present: exactly the live agents
+    values = [actions[a] for a in agents if a in actions]
+    if len(actions) != len(agents) or len(values) != len(agents):
+        live = set(agents)
         unknown = [a for a in actions if a not in live]
         if unknown:
             raise ValueError(
@@ -120,7 +122,6 @@ def check_action_dict(
             )
         missing = [a for a in agents if a not in actions]
         raise ValueError(f"no action given for agent {missing[0]!r}")
-    values = [actions[a] for a in agents]
     try:
         out = np.array(values)
     except (TypeError, ValueError):

@@ -81,8 +81,18 @@ def check(seed, family, K, log_scale):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for i, (nom, Ai, bi, loi, hii) in enumerate(problems):
-            ref, ref_feasible, _ = reference.solve_one(nom, Ai, bi, loi, hii, "clarabel")
             where = (family, seed, i, log_scale)
+            try:
+                ref, ref_feasible, _ = reference.solve_one(nom, Ai, bi, loi, hii, "clarabel")
+            except RuntimeError:
+                # clarabel stalls on some single-point polygons (a fan of rows through one
+                # point): the exact rational solver alone is the judge there
+                truth = exact_qp(nom, Ai, bi, loi, hii)
+                if truth is None:  # empty in rationals, a point to rounding: ours within 1e-9
+                    assert violation[i] <= 1e-9, (*where, violation[i])
+                else:
+                    assert np.abs(u[i] / scale - truth).max() / hii[0] <= 1e-9, where
+                continue
             assert feasible[i] == ref_feasible, where
             if ref_feasible:
                 err = np.abs(u[i] / scale - ref).max() / hii[0]

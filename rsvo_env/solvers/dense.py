@@ -59,22 +59,6 @@ def _serial(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, 
         )  # fmt: skip
 
 
-@njit(cache=True)
-def _serial_new(x, nom, omega, gamma, R2, lo, hi):
-    """:func:`_serial` with its outputs allocated here: one compiled call for a small scene."""
-    E, n = x.shape[0], x.shape[1]
-    out = np.empty((E, n, 2))
-    feasible = np.empty((E, n), dtype=np.bool_)
-    active = np.empty((E, n), dtype=np.int64)
-    violation = np.empty((E, n))
-    n_rows = np.empty((E, n), dtype=np.int64)
-    min_h = np.empty(E)
-    moved = np.empty((E, n))
-    _serial(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, n_rows, min_h,
-            moved)  # fmt: skip
-    return out, feasible, active, violation, n_rows, min_h, moved
-
-
 @njit(cache=True, parallel=True)
 def _parallel(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, n_rows, min_h,
               moved):  # fmt: skip
@@ -84,6 +68,20 @@ def _parallel(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation
             e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, violation, n_rows,
             moved,
         )  # fmt: skip
+
+
+@njit(cache=True)
+def _outputs(E, n):
+    """The arrays :func:`_serial` and :func:`_parallel` fill, allocated in one compiled call."""
+    return (
+        np.empty((E, n, 2)),
+        np.empty((E, n), dtype=np.bool_),
+        np.empty((E, n), dtype=np.int64),
+        np.empty((E, n)),
+        np.empty((E, n), dtype=np.int64),
+        np.empty(E),
+        np.empty((E, n)),
+    )
 
 
 def filter_dense(
@@ -102,37 +100,18 @@ def filter_dense(
     smallest barrier value (E,), and the intervention |u_safe - u_nominal| (E, N).
     """
     E, n = positions.shape[:2]
-    if E * n < PARALLEL_THRESHOLD:
-        return _serial_new(
-            np.asarray(positions, dtype=np.float64),
-            np.asarray(nominal, dtype=np.float64),
-            np.asarray(omega, dtype=np.float64),
-            float(gamma),
-            float(safety_radius) ** 2,
-            np.asarray(lo, dtype=np.float64),
-            np.asarray(hi, dtype=np.float64),
-        )
-    out = np.empty((E, n, 2))
-    feasible = np.empty((E, n), dtype=np.bool_)
-    active = np.empty((E, n), dtype=np.int64)
-    violation = np.empty((E, n))
-    n_rows = np.empty((E, n), dtype=np.int64)
-    min_h = np.empty(E)
-    moved = np.empty((E, n))
-    _parallel(
-        np.ascontiguousarray(positions, dtype=np.float64),
-        np.ascontiguousarray(nominal, dtype=np.float64),
-        np.ascontiguousarray(omega, dtype=np.float64),
+    outputs = _outputs(E, n)
+    # the choice made here, not in compiled code: a parallel kernel called from another
+    # compiled function runs many times slower
+    kernel = _parallel if E * n >= PARALLEL_THRESHOLD else _serial
+    kernel(
+        np.asarray(positions, dtype=np.float64),
+        np.asarray(nominal, dtype=np.float64),
+        np.asarray(omega, dtype=np.float64),
         float(gamma),
         float(safety_radius) ** 2,
-        np.ascontiguousarray(lo, dtype=np.float64),
-        np.ascontiguousarray(hi, dtype=np.float64),
-        out,
-        feasible,
-        active,
-        violation,
-        n_rows,
-        min_h,
-        moved,
+        np.asarray(lo, dtype=np.float64),
+        np.asarray(hi, dtype=np.float64),
+        *outputs,
     )
-    return out, feasible, active, violation, n_rows, min_h, moved
+    return outputs

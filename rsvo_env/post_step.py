@@ -1,0 +1,136 @@
+"""What follows integration in the core's step: the derived state, the metrics, the reward.
+
+After the positions move, the step derives the nearest distance, the K nearest neighbours, who
+is at its goal and whom the right-hand rule turns; records the step in the episode metrics;
+marks first arrivals; computes the reward terms and which envs terminated. For a scenario with
+the base hooks (``Scenario.at_goal``, ``right_hand_active``, ``reward``) and few agents all of it
+is one compiled call of the same kernels (:func:`fused`), so a small env pays one dispatch
+instead of a dozen; otherwise the hooks are called in turn (:func:`by_hooks`). Both give the
+same numbers, bit for bit (tested).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from rsvo_env.metrics import _accumulate
+from rsvo_env.neighbors import DENSE_MAX_AGENTS, _knn_dense_new, nearest_neighbors
+from rsvo_env.nominal import right_hand_active
+from rsvo_env.planar import _within
+from rsvo_env.scenario import Scenario, _reward_terms
+
+if TYPE_CHECKING:
+    from rsvo_env.core import Simulator
+
+_HOOKS = ("at_goal", "right_hand_active", "reward")
+
+
+def fusable(scenario: Scenario, n: int) -> bool:
+    """Whether :func:`fused` serves this scenario: its hooks are the base ones, and N is small
+    enough for the dense neighbour search."""
+    base = all(getattr(type(scenario), h) is getattr(Scenario, h) for h in _HOOKS)
+    return base and 2 <= n <= DENSE_MAX_AGENTS
+
+
+def derive(sim: Simulator) -> None:
+    """The derived state of the current positions, through the scenario's hooks."""
+    s = sim.state
+    d, idx = nearest_neighbors(s.positions, max(sim.k, 1))
+    s.nearest = d[..., 0]
+    s.neighbors = idx[..., : sim.k]
+    s.at_goal = sim.scenario.at_goal(s.positions, s.goals)
+    s.rh_active = sim.scenario.right_hand_active(s)
+
+
+def by_hooks(
+    sim: Simulator, before: NDArray, requested: NDArray, applied: NDArray, stats: Any
+) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
+    """The after-integration stage through the scenario's hooks: reward (E, N), terminated
+    (every agent at its goal) and truncated (not terminated, and the step limit reached)."""
+    s = sim.state
+    derive(sim)
+    at_goal = s.at_goal
+    sim.metrics.update(
+        before, s.positions, s.starts, s.goals, s.nearest, s.rh_active, at_goal, requested,
+        applied, stats,
+    )  # fmt: skip
+    first_arrival = at_goal & ~s.reached
+    s.reached |= at_goal
+    reward = sim.scenario.reward(before, s.positions, s.goals, first_arrival, sim.reward_weights)
+    terminated = at_goal.all(axis=-1)
+    return reward, terminated, ~terminated & (sim.metrics.steps >= sim.max_steps)
+
+
+@njit(cache=True)
+def _fused(x, before, goals, starts, reached, k, tol, rh_on, trigger, weights, counts,
+           min_distance, infeasible, sums, arrival, min_barrier, applied, requested, feasible,
+           min_h, dt, collision_below, series, max_steps):  # fmt: skip
+    """:func:`by_hooks` with the base hooks, as one compiled pass of the same kernels."""
+    E, n = x.shape[0], x.shape[1]
+    dist, idx = _knn_dense_new(x, max(k, 1))
+    nearest = dist[:, :, 0].copy()
+    neighbors = idx[:, :, :k].copy()
+    at_goal = _within(x, goals, tol)
+    if rh_on:
+        rh = right_hand_active(nearest, at_goal, trigger)
+    else:
+        rh = np.zeros((E, n), dtype=np.bool_)
+    _accumulate(counts, min_distance, infeasible, sums, arrival, min_barrier, before, x, starts,
+                goals, applied, requested, nearest, rh, at_goal, feasible, min_h, dt,
+                collision_below, series)  # fmt: skip
+    first = at_goal & ~reached
+    terminated = np.ones(E, dtype=np.bool_)
+    for e in range(E):
+        for i in range(n):
+            reached[e, i] = reached[e, i] or at_goal[e, i]
+            terminated[e] = terminated[e] and at_goal[e, i]
+    reward = np.empty((E, n))
+    _reward_terms(before.reshape(-1, 2), x.reshape(-1, 2), goals.reshape(-1, 2),
+                  first.reshape(-1), weights[0], weights[1], weights[2],
+                  reward.reshape(-1))  # fmt: skip
+    truncated = np.empty(E, dtype=np.bool_)
+    for e in range(E):
+        truncated[e] = not terminated[e] and counts[e, 0] >= max_steps
+    return nearest, neighbors, at_goal, rh, reward, terminated, truncated
+
+
+def fused(
+    sim: Simulator, before: NDArray, requested: NDArray, applied: NDArray, stats: Any
+) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
+    """:func:`by_hooks` in one compiled call (the scenario must be :func:`fusable`)."""
+    s, sc, m = sim.state, sim.scenario, sim.metrics
+    feasible, min_h = m.begin(stats)
+    p = sc.params
+    rh_on = p["deadlock_resolution"] == "right_hand"
+    s.nearest, s.neighbors, s.at_goal, s.rh_active, reward, terminated, truncated = _fused(
+        np.ascontiguousarray(s.positions),
+        np.ascontiguousarray(before),
+        np.ascontiguousarray(s.goals),
+        s.starts,
+        s.reached,
+        sim.k,
+        float(p["goal_tolerance"]),
+        rh_on,
+        float(sc.rh_trigger) if rh_on else 0.0,
+        sim.reward_weights,
+        m.counts,
+        m.min_distance,
+        m.infeasible,
+        m.sums,
+        m.arrival,
+        m.min_barrier,
+        applied,
+        requested,
+        feasible,
+        min_h,
+        m.dt,
+        m.collision_below,
+        m.step_series,
+        sim.max_steps,
+    )
+    m.end()
+    return reward, terminated, truncated
