@@ -8,7 +8,7 @@ to the centralized CBF condition (eq. ``centralized-cbf``).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -47,6 +47,17 @@ def _share(ti: NDArray, tj: NDArray) -> NDArray:
 def pair_omega(ti: NDArray, tj: NDArray) -> NDArray:
     """omega of validated scores, vectorised: ``(1 + cos(pi * share)) / 2`` (Def. 1, Thm. 1)."""
     return 0.5 * (1.0 + np.cos(np.pi * _share(ti, tj)))
+
+
+def scored_weight(ti: NDArray, tj: NDArray, symmetric: NDArray | bool) -> NDArray:
+    """omega of agent i against agent j, i < j, from the scores: the weight matrix's upper
+    triangle (Thm. 1; its lower triangle is ``1 -`` this), 0.5 where ``symmetric``."""
+    return np.where(symmetric, 0.5, pair_omega(ti, tj))
+
+
+def symmetric_envs(modes: Sequence[Weighting]) -> NDArray[np.bool_]:
+    """(E,): which envs' named weighting is ``symmetric``."""
+    return np.array([m == "symmetric" for m in modes])
 
 
 def responsibility_weight(theta_i: ArrayLike, theta_j: ArrayLike) -> NDArray[np.float64] | float:

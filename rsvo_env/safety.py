@@ -25,7 +25,9 @@ from rsvo_env.planar import norm
 from rsvo_env.responsibility import (
     min_pair_weight,
     pair_omega,
+    scored_weight,
     smallest_weight,
+    symmetric_envs,
     validate_weight_matrix,
     weight_matrix,
 )
@@ -123,9 +125,7 @@ class SafetyFilter:
         n = theta.shape[-1]
         if omega is None and weighting is not None:
             th = theta.reshape(-1)
-            w = pair_omega(th[I], th[J])
-            symmetric = np.array([m == "symmetric" for m in weighting])[I // n]
-            w = np.where(symmetric, 0.5, w)
+            w = scored_weight(th[I], th[J], symmetric_envs(weighting)[I // n])
             return np.stack([w, 1.0 - w], axis=1)
         if omega is None and callable(mode):
             omega = weight_matrix(theta, mode)

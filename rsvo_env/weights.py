@@ -19,8 +19,9 @@ from rsvo_env.pairs import Floor, floor_of, weight_floor
 from rsvo_env.responsibility import (
     Weighting,
     min_pair_weight,
-    pair_omega,
+    scored_weight,
     smallest_weight,
+    symmetric_envs,
     weight_matrix,
 )
 
@@ -82,9 +83,8 @@ class Weights:
         tj = np.take_along_axis(th[:, None, :], nb, axis=2)
         ti = np.broadcast_to(th[:, :, None], nb.shape)
         above = nb > np.arange(self.n)[None, :, None]
-        w = np.where(above, pair_omega(ti, tj), 1.0 - pair_omega(tj, ti))
-        symmetric = np.array([m == "symmetric" for m in modes])[pick]
-        return np.where(symmetric[:, None, None], 0.5, w)
+        sym = symmetric_envs(modes)[pick][:, None, None]
+        return np.where(above, scored_weight(ti, tj, sym), 1.0 - scored_weight(tj, ti, sym))
 
     def floor(self, theta: NDArray, modes: Sequence[Weighting]) -> Floor:
         """The floor of the large-N pair search (:mod:`rsvo_env.pairs`), once per change: from
