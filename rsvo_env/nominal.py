@@ -8,13 +8,33 @@ rotates the nominal clockwise by a fixed angle while a neighbour is within a tri
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env.planar import clip_norm, norm, toward
+from rsvo_env.planar import as_rows, clip2, clip_norm, norm
+
+
+@njit(cache=True)
+def _move_to_goal(x, g, k, limit, turn, c, s, out):
+    for i in range(x.shape[0]):
+        ux, uy = clip2(-k * (x[i, 0] - g[i, 0]), -k * (x[i, 1] - g[i, 1]), limit)
+        if turn[i]:
+            ux, uy = c * ux - s * uy, s * ux + c * uy
+        out[i, 0], out[i, 1] = ux, uy
+
+
+@functools.lru_cache(maxsize=32)
+def _clockwise(angle_deg: float) -> tuple[float, float]:
+    """cos and sin of a clockwise turn by ``angle_deg``."""
+    angle = -math.radians(angle_deg)
+    return float(np.cos(angle)), float(np.sin(angle))
+
+
+_NEVER = np.zeros(1, dtype=np.bool_)
 
 
 def move_to_goal(
@@ -28,7 +48,16 @@ def move_to_goal(
     """``u = -k (x - goal)``, scaled to norm <= u_max (paper, Sec. V-A); with ``turn`` (...),
     the right-hand rule in the same pass: the rows where it is set turned clockwise by
     ``angle_deg``."""
-    return toward(positions, goals, k, u_max, turn, -math.radians(angle_deg))
+    shape = positions.shape
+    x, g = as_rows(positions, shape), as_rows(goals, shape)
+    out = np.empty_like(x)
+    if turn is None:
+        active = np.broadcast_to(_NEVER, (x.shape[0],))
+    else:
+        active = np.ascontiguousarray(turn).reshape(-1)
+    c, s = _clockwise(float(angle_deg))
+    _move_to_goal(x, g, float(k), float(u_max), active, c, s, out)
+    return out.reshape(shape)
 
 
 @njit(cache=True)

@@ -6,8 +6,6 @@
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
@@ -59,50 +57,14 @@ def _clip(flat, limit, scale, out):
         out[i, 0], out[i, 1] = x * scale, y * scale
 
 
-@functools.lru_cache(maxsize=32)
-def _cos_sin(angle: float) -> tuple[float, float]:
-    return float(np.cos(angle)), float(np.sin(angle))
+def as_shape(a: NDArray, shape: tuple[int, ...]) -> NDArray:
+    """``a`` broadcast to ``shape`` (no copy when it has that shape already)."""
+    return a if a.shape == shape else np.broadcast_to(a, shape)
 
 
-@njit(cache=True)
-def _toward(x, g, k, limit, active, c, s, out):
-    for i in range(x.shape[0]):
-        ux, uy = clip2(-k * (x[i, 0] - g[i, 0]), -k * (x[i, 1] - g[i, 1]), limit)
-        if active[i]:
-            ux, uy = c * ux - s * uy, s * ux + c * uy
-        out[i, 0], out[i, 1] = ux, uy
-
-
-_NEVER = np.zeros(1, dtype=np.bool_)
-
-
-def _rows(a: NDArray, shape: tuple[int, ...]) -> NDArray[np.float64]:
+def as_rows(a: NDArray, shape: tuple[int, ...]) -> NDArray[np.float64]:
     """``a`` broadcast to ``shape`` (..., 2) as contiguous float rows (M, 2)."""
-    if a.shape != shape:
-        a = np.broadcast_to(a, shape)
-    return np.ascontiguousarray(a, dtype=np.float64).reshape(-1, 2)
-
-
-def toward(
-    positions: NDArray[np.float64],
-    goals: NDArray[np.float64],
-    k: float,
-    limit: float,
-    turn: NDArray[np.bool_] | None = None,
-    angle: float = 0.0,
-) -> NDArray[np.float64]:
-    """``-k (x - goal)`` per row, clipped to norm <= limit; then the rows where ``turn`` (...)
-    is set rotated by ``angle`` radians (the right-hand rule's turn)."""
-    x = _rows(positions, positions.shape)
-    g = _rows(goals, positions.shape)
-    out = np.empty_like(x)
-    if turn is None:
-        active = np.broadcast_to(_NEVER, (x.shape[0],))
-    else:
-        active = np.ascontiguousarray(turn).reshape(-1)
-    c, s = _cos_sin(float(angle))
-    _toward(x, g, float(k), float(limit), active, c, s, out)
-    return out.reshape(positions.shape)
+    return np.ascontiguousarray(as_shape(a, shape), dtype=np.float64).reshape(-1, 2)
 
 
 @njit(cache=True)
@@ -116,9 +78,7 @@ def within(
 ) -> NDArray[np.bool_]:
     """(...): whether each row of ``positions`` (..., 2) is within ``limit`` of its target:
     ``norm(positions - targets) <= limit``, the same arithmetic in one compiled pass."""
-    if targets.shape != positions.shape:
-        targets = np.broadcast_to(targets, positions.shape)
-    return _within(positions, targets, float(limit))
+    return _within(positions, as_shape(targets, positions.shape), float(limit))
 
 
 def clip_norm(u: NDArray[np.float64], limit: float, scale: float = 1.0) -> NDArray[np.float64]:
