@@ -17,8 +17,8 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import torch
 
+from training.config import limit_threads
 from training.evaluate import load_model
 from training.evaluation import paired, run_episodes, scripted_policy, summarize
 
@@ -37,13 +37,13 @@ RUNS = {
         for w in ("asymmetric", "symmetric")
         for s in (0, 1, 2)
     },
-    "crowd_residual": f"{TRAIN} --scenario crowd --seed 0 --time-limit 600 "
-    "--out runs/crowd_residual",
-    "crowd_gate02": f"{TRAIN} --scenario crowd --set gate_radius=0.2 --seed 0 --time-limit 1800 "
-    "--out runs/crowd_gate02",
-    "crowd_gate02_scale2": f"{TRAIN} --scenario crowd --set gate_radius=0.2 "
-    "--set residual_scale=2.0 --timesteps 100000000 --seed 0 --time-limit 1500 "
-    "--out runs/crowd_gate02_scale2",
+    **{
+        f"crowd_yield{x}": f"{TRAIN} --scenario crowd --seed {s} --out runs/crowd_yield{x}"
+        for s, x in ((0, ""), (1, "_s1"))
+    },
+    # the same crowd with the plain gate: a parked agent never steps aside
+    "crowd_plain_gate": f"{TRAIN} --scenario crowd --set yield_radius=null --seed 0 "
+    "--timesteps 6000000 --out runs/crowd_plain_gate",
 }
 
 
@@ -92,7 +92,7 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--runs", default="runs", help="the folder holding the runs")
     args = p.parse_args()
-    torch.set_num_threads(1)
+    limit_threads(1)
     runs = Path(args.runs)
     res = {name: evaluate(runs / name) for name in RUNS if (runs / name / "summary.json").exists()}
     lines = [
@@ -118,6 +118,7 @@ def main() -> int:
         *HEADER,
         *[row(name, r) for name, r in res.items() if not name.startswith("weighting_")],
         "",
+        *crowd_section(res),
     ]
     if (ROOT / "benchmarks" / "results" / GIF).exists():
         lines += [
@@ -143,6 +144,25 @@ def main() -> int:
     out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0
+
+
+def crowd_section(res: dict) -> list[str]:
+    """What yielding does in the 12-agent crowd: the yielding runs against the plain gate."""
+    yielding = [n for n in res if n.startswith("crowd_yield")]
+    if not yielding or "crowd_plain_gate" not in res:
+        return []
+    rate = ", ".join(f"{res[n]['policy']['success_rate']:.0%} (`{n}`)" for n in yielding)
+    plain, scripted = res["crowd_plain_gate"]["policy"], res[yielding[0]]["scripted"]
+    return [
+        "Crowd (12 agents): with the plain gate a parked agent is a fixed obstacle (the filter "
+        "only slows agents, it never pushes one aside), and an agent whose goal lies behind "
+        "parked agents never reaches it. With `yield_radius: 1.25` a parked agent's residual "
+        "acts again while a neighbour en route is within 1.25 m, so the policy can step aside. "
+        f"Success on the 100 held-out seeds: {rate} with yielding, "
+        f"{plain['success_rate']:.0%} with the plain gate (`crowd_plain_gate`), "
+        f"{scripted['success_rate']:.0%} for the scripted controller.",
+        "",
+    ]
 
 
 def weighting_section(res: dict, runs: Path) -> list[str]:

@@ -25,6 +25,7 @@ from rsvo_env import dynamics, observation, planar, post_step
 from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_neighbors
 from rsvo_env.pairs import Floor
+from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting, check_weighting
 from rsvo_env.safety import FilterResult, SafetyFilter, merge_stats
 from rsvo_env.scenarios import Scenario
@@ -101,7 +102,7 @@ class Simulator:
         self.filters: list[SafetyFilter] = []
         self.penalties: list[float] = []
         self._warned_options: set[str] = set()
-        self.residual: tuple[float, bool, float] | None = None
+        self.residual: Residual | None = None
         self.weights = Weights(self.num_envs, n)  # the one writer: set_theta, set_weighting, reset
         self.rngs: list[np.random.Generator | None] = [None] * self.num_envs
         self.state = State.empty(self.num_envs, n, self.k)
@@ -225,18 +226,16 @@ class Simulator:
         post_step.derive(self)
 
     def set_residual(
-        self, gate_radius: float | None, right_hand: bool = True, scale: float = 1.0
+        self,
+        gate_radius: float | None,
+        right_hand: bool = True,
+        scale: float = 1.0,
+        yield_radius: float | None = None,
     ) -> None:
-        """Residual actions (``None``: off): an action (norm clipped to 1, times ``scale``
-        u_max) is added to the scripted command (with or without the right-hand rule), gated off
-        within ``gate_radius`` of the goal, and the sum held to the speed limit. At ``scale``
-        1 a residual can turn a full-speed command by up to 90 degrees, at 2 also reverse it."""
-        if gate_radius is not None and check_real(gate_radius, "gate_radius") < 0:
-            raise ValueError(f"gate_radius = {gate_radius!r} must be >= 0")
-        if not check_real(scale, "residual scale") > 0:
-            raise ValueError(f"residual scale = {scale!r} must be > 0")
+        """Residual actions (``gate_radius=None``: off): each action is added to the scripted
+        command, gated off near the goal (:class:`rsvo_env.residual.Residual`)."""
         on = gate_radius is not None
-        self.residual = (float(gate_radius), bool(right_hand), float(scale)) if on else None
+        self.residual = Residual(gate_radius, right_hand, scale, yield_radius) if on else None
 
     def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by
@@ -246,11 +245,7 @@ class Simulator:
         if self.frame == "goal":
             u = planar.rotate(u, self.state.frame_angle)
         if self.residual is not None:
-            gate, right_hand, scale = self.residual
-            s = self.state
-            far = planar.norm(s.positions - s.goals) >= gate
-            u = self.scenario.nominal(s, right_hand) + np.where(far[..., None], scale * u, 0.0)
-            u = planar.clip_norm(u, self.u_max)
+            u = self.residual.controls(self.scenario, self.state, u, self.u_max)
         return u
 
     def to_actions(self, controls: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -52,7 +52,7 @@ class RSVOParallelEnv(ParallelEnv):
 
     Actions: ``Box(-1, 1, (2,))`` per agent; the env clips each action's norm to 1 and scales it
     by the scenario's ``u_max`` (velocity) or ``a_max`` (acceleration). Observations: float32,
-    ``5 + 8 K`` values (``rsvo_env.observation``). ``frame="goal"`` rotates observed vectors and
+    ``5 + 10 K`` values (``rsvo_env.observation``). ``frame="goal"`` rotates observed vectors and
     actions into each agent's own start-to-goal frame. ``max_cycles`` is PettingZoo's name for
     ``max_steps``. Per-agent infos have the same keys, types and shapes at reset and at every
     step (``docs/api.md``); the last finished episode's metrics are :attr:`episode_metrics`.
@@ -130,10 +130,14 @@ class RSVOParallelEnv(ParallelEnv):
             self.sim.set_weighting(0, mode)
 
     def set_residual(
-        self, gate_radius: float | None, right_hand: bool = True, scale: float = 1.0
+        self,
+        gate_radius: float | None,
+        right_hand: bool = True,
+        scale: float = 1.0,
+        yield_radius: float | None = None,
     ) -> None:
         """Residual actions on or off; see ``wrappers.ResidualAction``."""
-        self.sim.set_residual(gate_radius, right_hand, scale)
+        self.sim.set_residual(gate_radius, right_hand, scale, yield_radius)
 
     def add_safety_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
         """Turn on (another) filter stage of the core's step; see ``wrappers.RCBFSafetyFilter``."""

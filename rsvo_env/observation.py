@@ -63,6 +63,9 @@ OWN_FEATURES = (
 NEIGHBOR_FEATURES = (
     Feature("rel_position", 2, lambda L: (-2 * L.p * SQRT2, 2 * L.p * SQRT2)),
     Feature("rel_velocity", 2, lambda L: (-2 * L.v * SQRT2, 2 * L.v * SQRT2)),
+    # the neighbour's goal from the observer: where it is headed, and (equal to rel_position)
+    # whether it is parked there
+    Feature("rel_goal", 2, lambda L: (-2 * L.p * SQRT2, 2 * L.p * SQRT2)),
     Feature("omega", 1, lambda L: (0.0, 1.0)),
     Feature("theta", 1, lambda L: (0.0, L.theta_max)),
     Feature("gap", 1, lambda L: (-L.R, 2 * L.p * SQRT2)),
@@ -101,7 +104,22 @@ def bounds(limits: Limits, k: int) -> tuple[NDArray[np.float32], NDArray[np.floa
 # import, so they remain the one definition of order, widths and bounds.
 _KERNEL_LAYOUT = (
     ("goal_offset", 2, "velocity", 2, "theta", 1),
-    ("rel_position", 2, "rel_velocity", 2, "omega", 1, "theta", 1, "gap", 1, "present", 1),
+    (
+        "rel_position",
+        2,
+        "rel_velocity",
+        2,
+        "rel_goal",
+        2,
+        "omega",
+        1,
+        "theta",
+        1,
+        "gap",
+        1,
+        "present",
+        1,
+    ),
 )
 _TABLES = (OWN_FEATURES, NEIGHBOR_FEATURES)
 if _KERNEL_LAYOUT != tuple(tuple(x for f in t for x in (f.name, f.width)) for t in _TABLES):
@@ -127,14 +145,16 @@ def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, R, out):
                 j = nb[e, i, k]
                 px, py = x[e, j, 0] - x[e, i, 0], x[e, j, 1] - x[e, i, 1]
                 qx, qy = v[e, j, 0] - vx, v[e, j, 1] - vy
-                b = 5 + 8 * k
+                hx, hy = goals[e, j, 0] - x[e, i, 0], goals[e, j, 1] - x[e, i, 1]
+                b = 5 + 10 * k
                 rx, ry = c * px - s * py, s * px + c * py
                 o[b], o[b + 1] = rx, ry
                 o[b + 2], o[b + 3] = c * qx - s * qy, s * qx + c * qy
-                o[b + 4] = omega[e, i, k]
-                o[b + 5] = theta[e, j]
-                o[b + 6] = np.sqrt(rx * rx + ry * ry) - R
-                o[b + 7] = 1.0
+                o[b + 4], o[b + 5] = c * hx - s * hy, s * hx + c * hy
+                o[b + 6] = omega[e, i, k]
+                o[b + 7] = theta[e, j]
+                o[b + 8] = np.sqrt(rx * rx + ry * ry) - R
+                o[b + 9] = 1.0
 
 
 def observe(

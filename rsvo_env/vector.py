@@ -39,7 +39,8 @@ class BatchedEnv:
       values of this step are still those of the episode that ended.
 
     ``action="residual"`` adds each action to the scripted nominal command (``gate_radius``,
-    ``residual_right_hand``, ``residual_scale``: see ``Simulator.set_residual``).
+    ``residual_right_hand``, ``residual_scale``, ``yield_radius``: see
+    :class:`rsvo_env.residual.Residual`).
 
     Reset options (``theta``, (N,) or (E, N), and ``weighting``) hold for the auto-resets that
     follow, until the next ``reset``. Every keyword of ``RSVOParallelEnv`` and of the scenario
@@ -59,6 +60,7 @@ class BatchedEnv:
         gate_radius: float = 0.5,
         residual_right_hand: bool = True,
         residual_scale: float = 1.0,
+        yield_radius: float | None = None,
         **kwargs: Any,
     ) -> None:
         """``kwargs``: the filter's ``gamma``, ``solver``, ``barrier``, ``split``,
@@ -78,7 +80,7 @@ class BatchedEnv:
         if action not in ("direct", "residual"):
             raise ValueError(f"action = {action!r}; use 'direct' or 'residual'")
         if action == "residual":
-            self.sim.set_residual(gate_radius, residual_right_hand, residual_scale)
+            self.sim.set_residual(gate_radius, residual_right_hand, residual_scale, yield_radius)
         self.num_envs, self.num_agents = self.sim.num_envs, self.sim.n
         self.single_observation_space, self.single_action_space = self.sim.spaces()
         low, high = self.single_observation_space.low, self.single_observation_space.high

@@ -79,8 +79,8 @@ def check_batch_equals_singles(name, filtered, kwargs, steps):
 def test_spaces_and_shapes():
     venv = BatchedEnv("crowd", num_envs=4, num_agents=5, num_obs_neighbors=3)
     obs, info = venv.reset(seed=0)
-    assert obs.shape == (4, 5, 5 + 8 * 3) and obs.dtype == np.float32
-    assert venv.single_observation_space.shape == (5 + 8 * 3,)
+    assert obs.shape == (4, 5, 5 + 10 * 3) and obs.dtype == np.float32
+    assert venv.single_observation_space.shape == (5 + 10 * 3,)
     assert venv.single_action_space.shape == (2,)
     assert venv.observation_space.contains(obs)
     assert venv.num_envs == 4 and venv.num_agents == 5

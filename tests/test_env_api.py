@@ -61,7 +61,7 @@ def test_spaces_are_cached_and_shaped():
     a = env.possible_agents[0]
     assert env.observation_space(a) is env.observation_space(a)
     assert env.action_space(a) is env.action_space(a)
-    assert env.observation_space(a).shape == (5 + 8 * 3,)
+    assert env.observation_space(a).shape == (5 + 10 * 3,)
     assert np.all(np.isfinite(env.observation_space(a).high))
     assert env.action_space(a).shape == (2,)
 

@@ -58,7 +58,7 @@ def test_make_without_prior_import():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "(270,)"
+    assert out.stdout.strip() == "(330,)"  # 6 agents x (5 + 10 x 5 neighbours)
 
 
 def test_gymnasium_env_is_deterministic_under_a_seed():

@@ -6,6 +6,7 @@ import pytest
 
 import rsvo_env
 import wrappers
+from rsvo_env.residual import Residual
 from rsvo_env.vector import BatchedEnv
 
 
@@ -52,13 +53,19 @@ def test_the_residual_is_gated_near_the_goal_and_held_to_the_speed_limit():
     assert gated > 0
 
 
-@pytest.mark.parametrize("name", ["circular_swap", "ramp_merge"])
-def test_batched_residuals_equal_the_wrapper(name):
+@pytest.mark.parametrize(
+    "name, yield_radius", [("circular_swap", None), ("ramp_merge", None), ("crowd", 1.25)]
+)
+def test_batched_residuals_equal_the_wrapper(name, yield_radius):
     E = 2
-    venv = BatchedEnv(name, num_envs=E, action="residual", gate_radius=0.5, max_steps=60)
+    venv = BatchedEnv(
+        name, num_envs=E, action="residual", gate_radius=0.5, max_steps=60,
+        yield_radius=yield_radius,
+    )  # fmt: skip
     singles = [
         wrappers.ResidualAction(
-            wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, max_steps=60))
+            wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, max_steps=60)),
+            yield_radius=yield_radius,
         )
         for _ in range(E)
     ]
@@ -67,8 +74,13 @@ def test_batched_residuals_equal_the_wrapper(name):
         env.reset(seed=4 + e)
     rng = np.random.default_rng(1)
     agents = singles[0].possible_agents
+    yielded = 0
     for _ in range(100):
-        actions = rng.uniform(-1, 1, (E, len(agents), 2)).astype(np.float32)
+        # small residuals: agents reach their goals, and (crowd) parked ones get to yield
+        actions = rng.uniform(-0.3, 0.3, (E, len(agents), 2)).astype(np.float32)
+        s = venv.sim.state
+        yielded += np.sum(venv.sim.residual.open(s.positions, s.goals))
+        yielded -= np.sum(np.linalg.norm(s.positions - s.goals, axis=-1) >= 0.5)
         obs, reward, term, trunc, _ = venv.step(actions)
         for e, env in enumerate(singles):
             o, r, te, tr, _ = env.step({a: actions[e, i] for i, a in enumerate(agents)})
@@ -76,6 +88,7 @@ def test_batched_residuals_equal_the_wrapper(name):
                 o, _ = env.reset()
             assert np.array_equal(obs[e], np.stack([o[a] for a in agents]))
             assert np.array_equal(reward[e], [r[a] for a in agents])
+    assert (yielded > 0) == (yield_radius is not None)
 
 
 def test_bad_residual_settings_are_refused():
@@ -109,3 +122,57 @@ def test_the_residual_scale_decides_whether_a_full_speed_command_can_reverse(sca
 def test_a_bad_residual_scale_is_refused(scale):
     with pytest.raises(ValueError, match="residual scale"):
         BatchedEnv("crowd", num_agents=3, action="residual", residual_scale=scale)
+
+
+def dense_open(positions, goals, gate, yield_radius):
+    """Reference: en route, or closer than ``yield_radius`` to another agent of the same env
+    that is en route (every pair tested)."""
+    en_route = np.linalg.norm(positions - goals, axis=-1) >= gate
+    d = np.linalg.norm(positions[..., :, None, :] - positions[..., None, :, :], axis=-1)
+    n = d.shape[-1]
+    d[..., np.arange(n), np.arange(n)] = np.inf
+    return en_route | ((d < yield_radius) & en_route[..., None, :]).any(-1)
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
+@pytest.mark.parametrize("n", [2, 12, 90])
+def test_yielding_opens_exactly_the_gates_next_to_an_agent_en_route(n, scale):
+    """Against every pair, in envs side by side (pairs never cross envs), in any units."""
+    rng = np.random.default_rng(n)
+    E = 4
+    side = 2.5 * np.sqrt(n) * scale
+    positions = rng.uniform(0, side, (E, n, 2))
+    # a third of the agents parked on their goals; the others anywhere
+    goals = np.where(rng.random((E, n, 1)) < 0.33, positions, rng.uniform(0, side, (E, n, 2)))
+    # envs on top of one another: a neighbour across envs must not count
+    residual = Residual(0.5 * scale, yield_radius=1.25 * scale)
+    got = residual.open(positions, goals)
+    want = dense_open(positions, goals, 0.5 * scale, 1.25 * scale)
+    assert np.array_equal(got, want)
+    assert (want & ~(np.linalg.norm(positions - goals, axis=-1) >= 0.5 * scale)).any()
+    # without yielding: the plain gate
+    plain = Residual(0.5 * scale).open(positions, goals)
+    assert np.array_equal(plain, np.linalg.norm(positions - goals, axis=-1) >= 0.5 * scale)
+
+
+@pytest.mark.parametrize("yield_radius, moves", [(None, False), (1.25, True)])
+def test_a_parked_agent_steps_aside_only_when_it_may_yield(yield_radius, moves):
+    """Agent 0 parked on its goal, agent 1 pressed against it on its way: a sideways residual
+    moves agent 0 only with yielding on."""
+    venv = BatchedEnv(
+        "position_swap", action="residual", gate_radius=0.5, yield_radius=yield_radius,
+        start=((0.0, 0.0), (1.0, 0.0)), deadlock_resolution="none",
+    )  # fmt: skip
+    venv.reset(seed=0)
+    venv.sim.state.goals[0] = [[0.0, 0.0], [5.0, 0.0]]
+    venv.step(np.array([[[0.0, 1.0], [0.0, 0.0]]]))
+    moved = np.linalg.norm(venv.sim.state.positions[0, 0])
+    assert (moved > 0.01) == moves
+
+
+@pytest.mark.parametrize("value", [0.0, -1.0, float("nan"), float("inf"), "1", True, 1j])
+def test_a_bad_yield_radius_is_refused(value):
+    with pytest.raises(ValueError, match="yield_radius"):
+        BatchedEnv("crowd", num_agents=3, action="residual", yield_radius=value)
+    with pytest.raises(ValueError, match="yield_radius"):
+        wrappers.ResidualAction(rsvo_env.parallel_env("crowd"), yield_radius=value)

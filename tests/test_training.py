@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import yaml
 
+from rsvo_env import observation
 from training import config as configs
 from training import evaluate, train
 from training.evaluation import run_episodes, scripted_policy
@@ -41,6 +42,11 @@ def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys
     assert len(validations) >= 3 and all(int(v["collisions"]) == 0 for v in validations)
     saved = yaml.safe_load((run / "config.yaml").read_text())
     assert saved["env"]["num_agents"] == 4 and saved["seed"] == 1 and saved["algo"] == "ppo"
+    # one thread budget for the policy and the env's kernels (the config's default, 1)
+    import numba
+    import torch
+
+    assert saved["threads"] == 1 == torch.get_num_threads() == numba.get_num_threads()
 
     gif = tmp_path / "episode.gif"
     args = [str(run / "model.zip"), "--episodes", "6", "--seed", "5", "--compare-scripted"]
@@ -131,6 +137,22 @@ def test_readme_states_the_circular_config_as_it_is():
     assert "U(1, 10)" in text and env["theta_range"] == [1.0, 10.0] and env["random_rotation"]
     assert "6 M agent-steps" in text and cfg["timesteps"] == 6_000_000
     assert env["frame"] == "goal" and cfg["action"] == "residual" and cfg["algo"] == "ppo"
+
+
+def test_readme_states_the_crowd_config_as_it_is():
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    text = " ".join(readme.split("## Training a policy behind the filter", 1)[1].split())
+    cfg = configs.resolve(configs.load("crowd"))
+    assert "The 12-agent crowd" in text and cfg["env"]["num_agents"] == 12
+    assert "`yield_radius: 1.25`" in text and "within 1.25 m" in text
+    env = configs.make_env(cfg, num_envs=1)
+    assert env.sim.residual.yield_radius == 1.25 == cfg["yield_radius"]
+    assert env.scenario.params["safety_radius"] == 1.0  # so 1.25 m is 1.25 R
+    assert "15 M agent-steps" in text and cfg["timesteps"] == 15_000_000
+    assert "observes its neighbours' goals" in text
+    assert "rel_goal" in [f.name for f in observation.NEIGHBOR_FEATURES]
 
 
 def test_sac_trains_and_evaluates_through_the_same_entry_points(tmp_path):

@@ -21,7 +21,7 @@ ACTIONS = ("direct", "residual")
 WEIGHTINGS = ("asymmetric", "symmetric")
 TOP_KEYS = {
     "scenario", "algo", "action", "gate_radius", "residual_right_hand", "residual_scale",
-    "weighting", "num_envs",
+    "yield_radius", "weighting", "num_envs",
     "timesteps", "env", "ppo", "sac", "validation", "checkpoint_every", "seed", "threads",
     "engine", "rllib",
 }  # fmt: skip
@@ -137,9 +137,21 @@ def make_env(
         gate_radius=cfg.get("gate_radius", 0.5),
         residual_right_hand=cfg.get("residual_right_hand", True),
         residual_scale=cfg.get("residual_scale", 1.0),
+        yield_radius=cfg.get("yield_radius"),
         weighting=weighting or cfg["weighting"],
         **{**cfg["env"], **env_overrides},
     )
+
+
+def limit_threads(threads: int) -> None:
+    """One thread budget for the policy (torch) and the env's compiled kernels (numba). Both
+    keep a pool of workers that spin between parallel sections; on a machine of few cores, two
+    runs side by side with a pool each were 10x slower than with one thread each."""
+    import numba
+    import torch
+
+    torch.set_num_threads(threads)
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
 
 
 def save(cfg: dict[str, Any], path: str | Path) -> None:
@@ -163,5 +175,6 @@ def make_parallel(
             cfg.get("gate_radius", 0.5),
             cfg.get("residual_right_hand", True),
             cfg.get("residual_scale", 1.0),
+            cfg.get("yield_radius"),
         )
     return env

@@ -69,10 +69,8 @@ def evaluate(
     weighting: str | None = None,
 ) -> dict[str, Any]:
     """The evaluation as a dict (what ``evaluation.json`` holds)."""
-    import torch
-
     policy, cfg = load_model(model_path)
-    torch.set_num_threads(cfg["threads"])
+    configs.limit_threads(cfg["threads"])
     learned = run_episodes(cfg, policy, episodes, seed, weighting=weighting)
     result: dict[str, Any] = {
         "model": str(model_path),

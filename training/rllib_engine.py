@@ -61,7 +61,10 @@ def build(cfg: dict[str, Any], num_env_runners: int, num_envs_per_env_runner: in
     from training.rllib_env import RSVOMultiAgentEnv
 
     r = cfg["rllib"]
-    one_thread = {"OMP_NUM_THREADS": str(cfg["threads"]), "MKL_NUM_THREADS": str(cfg["threads"])}
+    one_thread = {
+        key: str(cfg["threads"])
+        for key in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
+    }
     return (
         PPOConfig()
         .environment(RSVOMultiAgentEnv, env_config={"cfg": cfg})
@@ -105,12 +108,11 @@ def train_rllib(
 ) -> dict[str, Any]:
     """Train as ``cfg`` says into ``out`` with RLlib; returns the summary (``summary.json``)."""
     import ray
-    import torch
 
     out = Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     configs.save(cfg, out / "config.yaml")
-    torch.set_num_threads(cfg["threads"])
+    configs.limit_threads(cfg["threads"])
     os.environ.setdefault("RAY_DEDUP_LOGS", "0")
     ray.init(address=address, include_dashboard=False, log_to_driver=False)
     try:

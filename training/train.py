@@ -82,7 +82,6 @@ def train(
     verbose: bool = False,
 ) -> dict[str, Any]:
     """Train as ``cfg`` says into ``out``; returns the run's summary (also in summary.json)."""
-    import torch
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
     from stable_baselines3.common.logger import configure
@@ -94,7 +93,7 @@ def train(
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     configs.save(cfg, out / "config.yaml")
-    torch.set_num_threads(cfg["threads"])
+    configs.limit_threads(cfg["threads"])
     batched = configs.make_env(cfg, num_envs=cfg["num_envs"])
     venv = VecMonitor(SB3VecEnv(batched))
     algo = {"ppo": PPO, "sac": SAC}[cfg["algo"]]

@@ -2,7 +2,8 @@
 
 The learner outputs a residual; the env adds it to the scripted move-to-goal command (with or
 without the right-hand rule), gates it off within ``gate_radius`` of the agent's goal (where the
-scripted controller already holds the agent inside the goal tolerance), and holds the sum to the
+scripted controller already holds the agent inside the goal tolerance) unless, with
+``yield_radius``, a neighbour still en route is that close, and holds the sum to the
 speed limit like every other command. The safety filter, when on, filters the sum. A thin
 ``BaseParallelWrapper``: it switches the core's residual mode and overrides nothing.
 
@@ -21,11 +22,19 @@ class ResidualAction(BaseParallelWrapper):
     """``gate_radius``: distance to the goal (physical units) under which the residual is
     ignored; ``right_hand``: whether the scripted command includes the right-hand rule;
     ``scale``: the residual's largest norm in speed limits (2 lets it reverse a full-speed
-    command, 1 only turn it)."""
+    command, 1 only turn it); ``yield_radius``: with it, a parked agent's residual acts again
+    while a neighbour still en route is closer than this (physical units), so it may step aside
+    (:class:`rsvo_env.residual.Residual`)."""
 
     def __init__(
-        self, env: Any, gate_radius: float = 0.5, right_hand: bool = True, scale: float = 1.0
+        self,
+        env: Any,
+        gate_radius: float = 0.5,
+        right_hand: bool = True,
+        scale: float = 1.0,
+        yield_radius: float | None = None,
     ) -> None:
         super().__init__(env)
-        env.unwrapped.set_residual(gate_radius, right_hand, scale)
+        env.unwrapped.set_residual(gate_radius, right_hand, scale, yield_radius)
         self.gate_radius, self.right_hand, self.scale = gate_radius, right_hand, scale
+        self.yield_radius = yield_radius

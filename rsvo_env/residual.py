@@ -1,0 +1,77 @@
+"""Residual actions: a learner's action is a correction added to the scripted nominal command.
+
+The residual (its norm clipped to 1, times ``scale`` u_max) is added to the scenario's nominal
+command (with or without the right-hand rule) and the sum is held to the speed limit, like every
+other command; the safety filter, when on, filters the sum. The residual is gated off within
+``gate_radius`` of the agent's goal, where the scripted controller alone brings the agent inside
+the goal tolerance and holds it there.
+
+A parked agent is a fixed obstacle to the others: the filter only ever slows an agent, never
+pushes one aside, so a goal behind parked agents cannot be reached. With ``yield_radius`` the
+gate of an agent opens again while a neighbour still en route (farther than ``gate_radius``
+from its own goal) is closer than ``yield_radius``: the policy may then step aside, and the
+scripted command brings the agent back once the neighbour has gone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rsvo_env import grid, planar
+from rsvo_env.validation import check_real
+
+
+def _distance(value: Any, name: str, least: str) -> float:
+    value = check_real(value, name)
+    if not (value > 0 if least == "> 0" else value >= 0):
+        raise ValueError(f"{name} = {value!r} must be {least}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Residual:
+    """The residual mode's parameters (physical units): ``gate_radius`` >= 0, ``scale`` > 0
+    (1 lets a residual turn a full-speed command by up to 90 degrees, 2 also reverse it),
+    ``yield_radius`` > 0 or None (no yielding)."""
+
+    gate_radius: float
+    right_hand: bool = True
+    scale: float = 1.0
+    yield_radius: float | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "gate_radius", _distance(self.gate_radius, "gate_radius", ">= 0"))
+        object.__setattr__(self, "scale", _distance(self.scale, "residual scale", "> 0"))
+        object.__setattr__(self, "right_hand", bool(self.right_hand))
+        if self.yield_radius is not None:
+            object.__setattr__(
+                self, "yield_radius", _distance(self.yield_radius, "yield_radius", "> 0")
+            )
+
+    def open(self, positions: NDArray[np.float64], goals: NDArray[np.float64]) -> NDArray:
+        """(E, N): whose residual acts. En route (at least ``gate_radius`` from the goal), or,
+        with ``yield_radius``, closer than it to a neighbour of the same env that is en route."""
+        en_route = planar.norm(positions - goals) >= self.gate_radius
+        if self.yield_radius is None or en_route.all():
+            return en_route
+        radius = np.full(en_route.shape, self.yield_radius)
+        i, j = grid.pairs_within_radii(positions, radius)
+        flat = en_route.reshape(-1)
+        opened = flat.copy()
+        opened[i[flat[j]]] = True
+        opened[j[flat[i]]] = True
+        return opened.reshape(en_route.shape)
+
+    def controls(
+        self, scenario: Any, state: Any, residual: NDArray[np.float64], u_max: float
+    ) -> NDArray[np.float64]:
+        """The controls (E, N, 2): the scripted command plus the gated residual (physical,
+        world frame, norm <= u_max), held to ``u_max``."""
+        on = self.open(state.positions, state.goals)
+        nominal = scenario.nominal(state, self.right_hand)
+        gated = np.where(on[..., None], self.scale * residual, 0.0)
+        return planar.clip_norm(nominal + gated, u_max)
