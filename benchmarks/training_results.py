@@ -39,7 +39,7 @@ RUNS = {
     },
     **{
         f"crowd_yield{x}": f"{TRAIN} --scenario crowd --seed {s} --out runs/crowd_yield{x}"
-        for s, x in ((0, ""), (1, "_s1"))
+        for s, x in ((0, ""), (1, "_s1"), (2, "_s2"))
     },
     # the same crowd with the plain gate: a parked agent never steps aside
     "crowd_plain_gate": f"{TRAIN} --scenario crowd --set yield_radius=null --seed 0 "
