@@ -22,14 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rsvo_env import grid, planar
-from rsvo_env.validation import check_real
-
-
-def _distance(value: Any, name: str, least: str) -> float:
-    value = check_real(value, name)
-    if not (value > 0 if least == "> 0" else value >= 0):
-        raise ValueError(f"{name} = {value!r} must be {least}")
-    return float(value)
+from rsvo_env.validation import check_positive, check_real
 
 
 @dataclass(frozen=True)
@@ -44,12 +37,15 @@ class Residual:
     yield_radius: float | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "gate_radius", _distance(self.gate_radius, "gate_radius", ">= 0"))
-        object.__setattr__(self, "scale", _distance(self.scale, "residual scale", "> 0"))
+        gate = check_real(self.gate_radius, "gate_radius")
+        if gate < 0:
+            raise ValueError(f"gate_radius = {self.gate_radius!r} must be >= 0")
+        object.__setattr__(self, "gate_radius", gate)
+        object.__setattr__(self, "scale", check_positive(self.scale, "residual scale"))
         object.__setattr__(self, "right_hand", bool(self.right_hand))
         if self.yield_radius is not None:
             object.__setattr__(
-                self, "yield_radius", _distance(self.yield_radius, "yield_radius", "> 0")
+                self, "yield_radius", check_positive(self.yield_radius, "yield_radius")
             )
 
     def open(self, positions: NDArray[np.float64], goals: NDArray[np.float64]) -> NDArray:

@@ -121,6 +121,17 @@ def hyperparameters(cfg: dict[str, Any]) -> dict[str, Any]:
     return hyper
 
 
+def residual_settings(cfg: dict[str, Any]) -> tuple[float, bool, float, float | None]:
+    """A config's residual mode, the env's defaults where it is silent: gate radius, right-hand
+    rule, scale, yield radius."""
+    return (
+        cfg.get("gate_radius", 0.5),
+        cfg.get("residual_right_hand", True),
+        cfg.get("residual_scale", 1.0),
+        cfg.get("yield_radius"),
+    )
+
+
 def make_env(
     cfg: dict[str, Any],
     num_envs: int,
@@ -130,14 +141,15 @@ def make_env(
 ) -> BatchedEnv:
     """The filtered batched env a config describes (``action``/``weighting``: another choice,
     e.g. ``action="direct"`` for the scripted controller under the same protocol)."""
+    gate, right_hand, scale, yield_radius = residual_settings(cfg)
     return BatchedEnv(
         cfg["scenario"],
         num_envs=num_envs,
         action=action or cfg["action"],
-        gate_radius=cfg.get("gate_radius", 0.5),
-        residual_right_hand=cfg.get("residual_right_hand", True),
-        residual_scale=cfg.get("residual_scale", 1.0),
-        yield_radius=cfg.get("yield_radius"),
+        gate_radius=gate,
+        residual_right_hand=right_hand,
+        residual_scale=scale,
+        yield_radius=yield_radius,
         weighting=weighting or cfg["weighting"],
         **{**cfg["env"], **env_overrides},
     )
@@ -170,11 +182,5 @@ def make_parallel(
         cfg["scenario"], render_mode=render_mode, weighting=cfg["weighting"], **cfg["env"]
     )
     if (action or cfg["action"]) == "residual":
-        env = ResidualAction(
-            env,
-            cfg.get("gate_radius", 0.5),
-            cfg.get("residual_right_hand", True),
-            cfg.get("residual_scale", 1.0),
-            cfg.get("yield_radius"),
-        )
+        env = ResidualAction(env, *residual_settings(cfg))
     return env
