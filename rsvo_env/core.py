@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import gymnasium
@@ -29,8 +30,9 @@ from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting, check_weighting
 from rsvo_env.safety import FilterResult, SafetyFilter, merge_stats
 from rsvo_env.scenarios import Scenario
+from rsvo_env.stall import StallClock, goal_distance
 from rsvo_env.state import State
-from rsvo_env.validation import check_real
+from rsvo_env.validation import check_count, check_real
 from rsvo_env.weights import Weights
 
 RESET_OPTIONS = ("theta", "weighting")
@@ -41,7 +43,9 @@ class Simulator:
 
     ``weighting``: every episode's default (a reset option overrides it once); ``reward_*``
     weigh the reward terms (``reward_team``: the share of each agent's reward replaced by its
-    env's mean); ``record_series`` (E = 1) keeps the series the paper plots."""
+    env's mean); ``stall_clock``: observe each agent's :class:`rsvo_env.stall.StallClock`, in
+    units of that many steps (None: not observed); ``record_series`` (E = 1) keeps the series
+    the paper plots."""
 
     def __init__(
         self,
@@ -54,13 +58,11 @@ class Simulator:
         reward_time: float = 0.01,
         reward_goal: float = 10.0,
         reward_team: float = 0.0,
+        stall_clock: int | None = None,
         record_series: bool = False,
     ) -> None:
         n = scenario.num_agents
-        if isinstance(num_envs, (bool, np.bool_)) or not isinstance(num_envs, (int, np.integer)):
-            raise ValueError(f"num_envs = {num_envs!r} must be an integer >= 1")
-        if num_envs < 1:
-            raise ValueError(f"num_envs = {num_envs!r} must be an integer >= 1")
+        check_count(num_envs, "num_envs", 1)
         if frame not in observation.FRAMES:
             raise ValueError(f"frame = {frame!r}; use one of {observation.FRAMES}")
         if num_obs_neighbors is None:
@@ -110,12 +112,16 @@ class Simulator:
             self.num_envs, n, self.dt, self.safety_radius, record_series=record_series
         )
         self.limits = observation.limits_for(scenario)
+        self.stall: StallClock | None = None
+        if stall_clock is not None:
+            self.stall = StallClock.create(stall_clock, self.num_envs, n)
+            self.limits = replace(self.limits, stall=self.stall.bound(self.max_steps))
         # the after-integration stage in one compiled call where the scenario allows it
         self.fused_post_step = post_step.fusable(scenario, n)
 
     def spaces(self) -> tuple[gymnasium.spaces.Box, gymnasium.spaces.Box]:
         """One agent's observation and action spaces (bounded Boxes, float32)."""
-        low, high = observation.bounds(self.limits, self.k)
+        low, high = observation.bounds(self.limits, self.k, self.stall is not None)
         return (
             gymnasium.spaces.Box(low, high, dtype=np.float32),
             gymnasium.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32),
@@ -209,6 +215,8 @@ class Simulator:
         self._derive()
         s.reached[idx] = s.at_goal[idx]
         self.metrics.reset(idx)
+        if self.stall is not None:
+            self.stall.reset(idx, goal_distance(s.positions[idx], s.goals[idx]))
 
     def _check_start(self, start: NDArray[np.float64]) -> None:
         """Starting positions must be in the safe set: every pair at least R apart."""
@@ -231,11 +239,14 @@ class Simulator:
         right_hand: bool = True,
         scale: float = 1.0,
         yield_radius: float | None = None,
+        interaction_radius: float | None = None,
     ) -> None:
         """Residual actions (``gate_radius=None``: off): each action is added to the scripted
         command, gated off near the goal (:class:`rsvo_env.residual.Residual`)."""
-        on = gate_radius is not None
-        self.residual = Residual(gate_radius, right_hand, scale, yield_radius) if on else None
+        self.residual = None
+        if gate_radius is not None:
+            radii = (yield_radius, interaction_radius)
+            self.residual = Residual(gate_radius, right_hand, scale, *radii)
 
     def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by
@@ -320,6 +331,8 @@ class Simulator:
         if self.reward_team:
             # each agent also shares its env's mean reward (the reward_team share of it)
             reward = reward + self.reward_team * (reward.mean(-1, keepdims=True) - reward)
+        if self.stall is not None:
+            self.stall.tick(goal_distance(s.positions, s.goals), s.at_goal, self.safety_radius)
         signals = self.signals(u_nominal, u, intervention, stats)
         return self.observe(), reward, terminated, truncated, signals
 
@@ -369,4 +382,5 @@ class Simulator:
             s.neighbors[pick],
             s.frame_angle[pick] if self.frame == "goal" else None,
             self.safety_radius,
+            None if self.stall is None else self.stall.value(pick),
         )

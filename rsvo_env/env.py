@@ -52,10 +52,11 @@ class RSVOParallelEnv(ParallelEnv):
 
     Actions: ``Box(-1, 1, (2,))`` per agent; the env clips each action's norm to 1 and scales it
     by the scenario's ``u_max`` (velocity) or ``a_max`` (acceleration). Observations: float32,
-    ``5 + 10 K`` values (``rsvo_env.observation``). ``frame="goal"`` rotates observed vectors and
-    actions into each agent's own start-to-goal frame. ``max_cycles`` is PettingZoo's name for
-    ``max_steps``. Per-agent infos have the same keys, types and shapes at reset and at every
-    step (``docs/api.md``); the last finished episode's metrics are :attr:`episode_metrics`.
+    ``5 + 10 K`` values (``6 + 10 K`` with ``stall_clock``; ``rsvo_env.observation``).
+    ``frame="goal"`` rotates observed vectors and actions into each agent's own start-to-goal
+    frame. ``max_cycles`` is PettingZoo's name for ``max_steps``. Per-agent infos have the same
+    keys, types and shapes at reset and at every step (``docs/api.md``); the last finished
+    episode's metrics are :attr:`episode_metrics`.
     """
 
     metadata = {
@@ -76,8 +77,8 @@ class RSVOParallelEnv(ParallelEnv):
         """``keep_history``: keep every step's positions in ``history`` (the whole trajectory);
         by default only the last ``TRAIL`` steps the renderer draws, so memory does not grow with
         the episode. ``kwargs``: ``num_obs_neighbors``, ``frame``, ``weighting``,
-        ``reward_progress``, ``reward_time``, ``reward_goal``, ``reward_team``, ``max_cycles``,
-        and every scenario parameter."""
+        ``reward_progress``, ``reward_time``, ``reward_goal``, ``reward_team``, ``stall_clock``,
+        ``max_cycles``, and every scenario parameter."""
         if not isinstance(keep_history, (bool, np.bool_)):
             raise ValueError(f"keep_history = {keep_history!r} must be True or False")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -135,9 +136,10 @@ class RSVOParallelEnv(ParallelEnv):
         right_hand: bool = True,
         scale: float = 1.0,
         yield_radius: float | None = None,
+        interaction_radius: float | None = None,
     ) -> None:
         """Residual actions on or off; see ``wrappers.ResidualAction``."""
-        self.sim.set_residual(gate_radius, right_hand, scale, yield_radius)
+        self.sim.set_residual(gate_radius, right_hand, scale, yield_radius, interaction_radius)
 
     def add_safety_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
         """Turn on (another) filter stage of the core's step; see ``wrappers.RCBFSafetyFilter``."""

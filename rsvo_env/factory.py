@@ -16,6 +16,7 @@ SIM_KEYWORDS = (
     "reward_progress",
     "reward_time",
     "reward_goal",
+    "stall_clock",
     "reward_team",
 )
 FILTER_KEYWORDS = ("gamma", "solver", "barrier", "split", "neighbor_radius")

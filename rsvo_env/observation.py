@@ -2,7 +2,8 @@
 
 Agent i sees, relative to itself and float32: its own features, then the K nearest neighbours'
 features, nearest first. ``frame="goal"`` rotates every vector into the agent's start-to-goal
-frame (so rotated scenarios are the same task).
+frame (so rotated scenarios are the same task). With a stall clock (``rsvo_env.stall``), its
+value follows the own features, before the neighbours'.
 """
 
 from __future__ import annotations
@@ -22,12 +23,14 @@ SQRT2 = float(np.sqrt(2.0))
 @dataclass(frozen=True)
 class Limits:
     """What bounds every observed value in an episode: positions within ``p`` of the origin,
-    speeds within ``v`` per component, theta up to ``theta_max``, the safety radius ``R``."""
+    speeds within ``v`` per component, theta up to ``theta_max``, the safety radius ``R``, the
+    stall clock up to ``stall``."""
 
     p: float
     v: float
     theta_max: float
     R: float
+    stall: float = 0.0
 
 
 def limits_for(scenario: Any) -> Limits:
@@ -60,6 +63,8 @@ OWN_FEATURES = (
     Feature("velocity", 2, lambda L: (-L.v * SQRT2, L.v * SQRT2)),
     Feature("theta", 1, lambda L: (0.0, L.theta_max)),
 )
+# optional, after the own features: steps since the agent last came closer to its goal, scaled
+STALL_FEATURE = Feature("stall", 1, lambda L: (0.0, L.stall))
 NEIGHBOR_FEATURES = (
     Feature("rel_position", 2, lambda L: (-2 * L.p * SQRT2, 2 * L.p * SQRT2)),
     Feature("rel_velocity", 2, lambda L: (-2 * L.v * SQRT2, 2 * L.v * SQRT2)),
@@ -77,12 +82,19 @@ OWN_WIDTH = sum(f.width for f in OWN_FEATURES)
 NEIGHBOR_WIDTH = sum(f.width for f in NEIGHBOR_FEATURES)
 
 
-def size(k: int) -> int:
-    """Length D of one agent's observation with K neighbours."""
-    return OWN_WIDTH + k * NEIGHBOR_WIDTH
+def size(k: int, stall: bool = False) -> int:
+    """Length D of one agent's observation with K neighbours (and the stall clock)."""
+    return OWN_WIDTH + int(stall) + k * NEIGHBOR_WIDTH
 
 
-def bounds(limits: Limits, k: int) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+def own_features(stall: bool) -> tuple[Feature, ...]:
+    """The own features' table, with the stall clock last when it is observed."""
+    return OWN_FEATURES + (STALL_FEATURE,) if stall else OWN_FEATURES
+
+
+def bounds(
+    limits: Limits, k: int, stall: bool = False
+) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
     """(low, high) of one agent's observation, in the table's order."""
 
     def spread(table: tuple[Feature, ...]) -> tuple[list[float], list[float]]:
@@ -93,7 +105,7 @@ def bounds(limits: Limits, k: int) -> tuple[NDArray[np.float32], NDArray[np.floa
             hi += [b] * f.width
         return lo, hi
 
-    own_lo, own_hi = spread(OWN_FEATURES)
+    own_lo, own_hi = spread(own_features(stall))
     nb_lo, nb_hi = spread(NEIGHBOR_FEATURES)
     low = np.array(own_lo + nb_lo * k, dtype=np.float32)
     high = np.array(own_hi + nb_hi * k, dtype=np.float32)
@@ -128,7 +140,7 @@ if _KERNEL_LAYOUT != tuple(tuple(x for f in t for x in (f.name, f.width)) for t 
 
 
 @njit(cache=True)
-def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, R, out):
+def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, R, stall, own, out):
     E, n, K = nb.shape
     for e in range(E):
         for i in range(n):
@@ -141,12 +153,14 @@ def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, R, out):
             o[0], o[1] = c * gx - s * gy, s * gx + c * gy
             o[2], o[3] = c * vx - s * vy, s * vx + c * vy
             o[4] = theta[e, i]
+            if own > 5:
+                o[5] = stall[e, i]
             for k in range(K):
                 j = nb[e, i, k]
                 px, py = x[e, j, 0] - x[e, i, 0], x[e, j, 1] - x[e, i, 1]
                 qx, qy = v[e, j, 0] - vx, v[e, j, 1] - vy
                 hx, hy = goals[e, j, 0] - x[e, i, 0], goals[e, j, 1] - x[e, i, 1]
-                b = 5 + 10 * k
+                b = own + 10 * k
                 rx, ry = c * px - s * py, s * px + c * py
                 o[b], o[b + 1] = rx, ry
                 o[b + 2], o[b + 3] = c * qx - s * qy, s * qx + c * qy
@@ -166,14 +180,17 @@ def observe(
     neighbors: NDArray[np.int64],
     frame_angle: NDArray[np.float64] | None,
     safety_radius: float,
+    stall: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float32]:
     """Observations (E, N, D) float32 of E envs; ``neighbors`` (E, N, K) are local indices and
     ``neighbor_omega`` (E, N, K) each agent's weight against them. ``frame_angle`` (E, N)
-    rotates into each agent's goal frame (None: world frame)."""
+    rotates into each agent's goal frame (None: world frame); ``stall`` (E, N): the stall clock,
+    observed when given."""
     E, n, K = neighbors.shape
-    out = np.empty((E, n, size(K)), dtype=np.float32)
+    out = np.empty((E, n, size(K, stall is not None)), dtype=np.float32)
     use_frame = frame_angle is not None
     angle = frame_angle if use_frame else np.zeros((E, n))
+    clock = np.zeros((E, n)) if stall is None else stall
     # the kernel indexes any layout: no contiguous copies
     _observe(
         positions,
@@ -185,6 +202,8 @@ def observe(
         angle,
         use_frame,
         float(safety_radius),
+        clock,
+        OWN_WIDTH + int(stall is not None),  # where the neighbours' blocks begin
         out,
     )
     return out

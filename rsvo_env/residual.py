@@ -11,6 +11,11 @@ pushes one aside, so a goal behind parked agents cannot be reached. With ``yield
 gate of an agent opens again while a neighbour still en route (farther than ``gate_radius``
 from its own goal) is closer than ``yield_radius``: the policy may then step aside, and the
 scripted command brings the agent back once the neighbour has gone.
+
+A policy trained to hold still near its goal (to let a neighbour pass) tends to hold still there
+with nobody around too, for ever. With ``interaction_radius`` the residual of an agent en route
+acts only while another agent is closer than that: alone, an agent follows the scripted command,
+which is what an agent alone should do.
 """
 
 from __future__ import annotations
@@ -29,12 +34,14 @@ from rsvo_env.validation import check_positive, check_real
 class Residual:
     """The residual mode's parameters (physical units): ``gate_radius`` >= 0, ``scale`` > 0
     (1 lets a residual turn a full-speed command by up to 90 degrees, 2 also reverse it),
-    ``yield_radius`` > 0 or None (no yielding)."""
+    ``yield_radius`` > 0 or None (no yielding), ``interaction_radius`` > 0 or None (the
+    residual of an agent en route acts whatever its neighbours' distance)."""
 
     gate_radius: float
     right_hand: bool = True
     scale: float = 1.0
     yield_radius: float | None = None
+    interaction_radius: float | None = None
 
     def __post_init__(self) -> None:
         gate = check_real(self.gate_radius, "gate_radius")
@@ -43,23 +50,32 @@ class Residual:
         object.__setattr__(self, "gate_radius", gate)
         object.__setattr__(self, "scale", check_positive(self.scale, "residual scale"))
         object.__setattr__(self, "right_hand", bool(self.right_hand))
-        if self.yield_radius is not None:
-            object.__setattr__(
-                self, "yield_radius", check_positive(self.yield_radius, "yield_radius")
-            )
+        for name in ("yield_radius", "interaction_radius"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, check_positive(getattr(self, name), name))
 
     def open(self, positions: NDArray[np.float64], goals: NDArray[np.float64]) -> NDArray:
-        """(E, N): whose residual acts. En route (at least ``gate_radius`` from the goal), or,
-        with ``yield_radius``, closer than it to a neighbour of the same env that is en route."""
+        """(E, N): whose residual acts. En route (at least ``gate_radius`` from the goal) and,
+        with ``interaction_radius``, closer than it to another agent of the same env; or, with
+        ``yield_radius``, closer than that to a neighbour of the same env that is en route."""
         en_route = planar.norm(positions - goals) >= self.gate_radius
-        if self.yield_radius is None or en_route.all():
+        radii = [r for r in (self.yield_radius, self.interaction_radius) if r is not None]
+        if not radii or (self.interaction_radius is None and en_route.all()):
             return en_route
-        radius = np.full(en_route.shape, self.yield_radius)
-        i, j = grid.pairs_within_radii(positions, radius)
+        i, j = grid.pairs_within_radii(positions, np.full(en_route.shape, max(radii)))
         flat = en_route.reshape(-1)
+        x = positions.reshape(-1, 2)
+        d = planar.norm(x[i] - x[j])
         opened = flat.copy()
-        opened[i[flat[j]]] = True
-        opened[j[flat[i]]] = True
+        if self.interaction_radius is not None:
+            near = np.zeros_like(flat)
+            close = d < self.interaction_radius
+            near[i[close]] = near[j[close]] = True
+            opened &= near
+        if self.yield_radius is not None:
+            close = d < self.yield_radius
+            opened[i[close & flat[j]]] = True
+            opened[j[close & flat[i]]] = True
         return opened.reshape(en_route.shape)
 
     def controls(

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from rsvo_env import nominal
 from rsvo_env.planar import within
-from rsvo_env.validation import check_positive, check_real, check_theta, real_array
+from rsvo_env.validation import check_count, check_positive, check_real, check_theta, real_array
 
 COMMON_DEFAULTS: dict[str, Any] = {
     "dt": 0.01,
@@ -68,11 +68,7 @@ class Scenario:
             )
         params.update(kwargs)
         self.params = params
-        count = params["num_agents"]
-        if isinstance(count, (bool, np.bool_)) or not isinstance(count, (int, np.integer)):
-            raise ValueError(f"{self.name}.num_agents = {count!r} must be an integer >= 2")
-        if count < 2:
-            raise ValueError(f"{self.name}.num_agents = {count!r} must be an integer >= 2")
+        check_count(params["num_agents"], f"{self.name}.num_agents", 2)
         for key, default in {**COMMON_DEFAULTS, **self.defaults}.items():
             # every real-valued parameter must be real and finite (a NaN would only surface
             # later, as an error naming no field)
@@ -96,9 +92,7 @@ class Scenario:
                 f"{self.name}.deadlock_resolution = {params['deadlock_resolution']!r}; "
                 f"use one of {DEADLOCK_RESOLUTIONS}"
             )
-        steps = params["max_steps"]
-        if not isinstance(steps, (int, np.integer)) or steps < 1:
-            raise ValueError(f"{self.name}.max_steps = {steps!r} must be an integer >= 1")
+        check_count(params["max_steps"], f"{self.name}.max_steps", 1)
         if params["theta"] is not None:
             self.check_theta(params["theta"])
         if params["theta_range"] is not None:

@@ -140,6 +140,14 @@ def check_action_dict(
     return out.astype(np.float64, copy=False)
 
 
+def check_count(value: int, name: str, least: int) -> int:
+    """An integer >= ``least`` (not a bool, a float or a string)."""
+    integer = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+    if not integer or value < least:
+        raise ValueError(f"{name} = {value!r} must be an integer >= {least}")
+    return int(value)
+
+
 def check_positive(value: float, name: str) -> float:
     """A finite real number > 0 (not a bool or a string)."""
     if isinstance(value, (bool, np.bool_, str, bytes)):

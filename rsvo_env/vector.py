@@ -39,7 +39,7 @@ class BatchedEnv:
       values of this step are still those of the episode that ended.
 
     ``action="residual"`` adds each action to the scripted nominal command (``gate_radius``,
-    ``residual_right_hand``, ``residual_scale``, ``yield_radius``: see
+    ``residual_right_hand``, ``residual_scale``, ``yield_radius``, ``interaction_radius``: see
     :class:`rsvo_env.residual.Residual`).
 
     Reset options (``theta``, (N,) or (E, N), and ``weighting``) hold for the auto-resets that
@@ -61,6 +61,7 @@ class BatchedEnv:
         residual_right_hand: bool = True,
         residual_scale: float = 1.0,
         yield_radius: float | None = None,
+        interaction_radius: float | None = None,
         **kwargs: Any,
     ) -> None:
         """``kwargs``: the filter's ``gamma``, ``solver``, ``barrier``, ``split``,
@@ -80,7 +81,8 @@ class BatchedEnv:
         if action not in ("direct", "residual"):
             raise ValueError(f"action = {action!r}; use 'direct' or 'residual'")
         if action == "residual":
-            self.sim.set_residual(gate_radius, residual_right_hand, residual_scale, yield_radius)
+            radii = (yield_radius, interaction_radius)
+            self.sim.set_residual(gate_radius, residual_right_hand, residual_scale, *radii)
         self.num_envs, self.num_agents = self.sim.num_envs, self.sim.n
         self.single_observation_space, self.single_action_space = self.sim.spaces()
         low, high = self.single_observation_space.low, self.single_observation_space.high

@@ -54,18 +54,19 @@ def test_the_residual_is_gated_near_the_goal_and_held_to_the_speed_limit():
 
 
 @pytest.mark.parametrize(
-    "name, yield_radius", [("circular_swap", None), ("ramp_merge", None), ("crowd", 1.25)]
-)
-def test_batched_residuals_equal_the_wrapper(name, yield_radius):
+    "name, yield_radius, interaction_radius",
+    [
+        ("circular_swap", None, None), ("ramp_merge", None, None), ("crowd", 1.25, None),
+        ("crowd", 1.25, 2.0),
+    ],
+)  # fmt: skip
+def test_batched_residuals_equal_the_wrapper(name, yield_radius, interaction_radius):
     E = 2
-    venv = BatchedEnv(
-        name, num_envs=E, action="residual", gate_radius=0.5, max_steps=60,
-        yield_radius=yield_radius,
-    )  # fmt: skip
+    radii = {"yield_radius": yield_radius, "interaction_radius": interaction_radius}
+    venv = BatchedEnv(name, num_envs=E, action="residual", gate_radius=0.5, max_steps=60, **radii)
     singles = [
         wrappers.ResidualAction(
-            wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, max_steps=60)),
-            yield_radius=yield_radius,
+            wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, max_steps=60)), **radii
         )
         for _ in range(E)
     ]
@@ -74,13 +75,15 @@ def test_batched_residuals_equal_the_wrapper(name, yield_radius):
         env.reset(seed=4 + e)
     rng = np.random.default_rng(1)
     agents = singles[0].possible_agents
-    yielded = 0
+    yielded = alone = 0
     for _ in range(100):
         # small residuals: agents reach their goals, and (crowd) parked ones get to yield
         actions = rng.uniform(-0.3, 0.3, (E, len(agents), 2)).astype(np.float32)
         s = venv.sim.state
-        yielded += np.sum(venv.sim.residual.open(s.positions, s.goals))
-        yielded -= np.sum(np.linalg.norm(s.positions - s.goals, axis=-1) >= 0.5)
+        acting = venv.sim.residual.open(s.positions, s.goals)
+        en_route = np.linalg.norm(s.positions - s.goals, axis=-1) >= 0.5
+        yielded += np.sum(acting & ~en_route)
+        alone += np.sum(en_route & ~acting)
         obs, reward, term, trunc, _ = venv.step(actions)
         for e, env in enumerate(singles):
             o, r, te, tr, _ = env.step({a: actions[e, i] for i, a in enumerate(agents)})
@@ -89,6 +92,7 @@ def test_batched_residuals_equal_the_wrapper(name, yield_radius):
             assert np.array_equal(obs[e], np.stack([o[a] for a in agents]))
             assert np.array_equal(reward[e], [r[a] for a in agents])
     assert (yielded > 0) == (yield_radius is not None)
+    assert (alone > 0) == (interaction_radius is not None)
 
 
 def test_bad_residual_settings_are_refused():
@@ -124,14 +128,61 @@ def test_a_bad_residual_scale_is_refused(scale):
         BatchedEnv("crowd", num_agents=3, action="residual", residual_scale=scale)
 
 
-def dense_open(positions, goals, gate, yield_radius):
-    """Reference: en route, or closer than ``yield_radius`` to another agent of the same env
-    that is en route (every pair tested)."""
+def dense_open(positions, goals, gate, yield_radius, interaction_radius=None):
+    """Reference: en route (and, with ``interaction_radius``, closer than it to another agent
+    of the same env), or closer than ``yield_radius`` to another agent of the same env that is
+    en route (every pair tested)."""
     en_route = np.linalg.norm(positions - goals, axis=-1) >= gate
     d = np.linalg.norm(positions[..., :, None, :] - positions[..., None, :, :], axis=-1)
     n = d.shape[-1]
     d[..., np.arange(n), np.arange(n)] = np.inf
-    return en_route | ((d < yield_radius) & en_route[..., None, :]).any(-1)
+    acting = en_route
+    if interaction_radius is not None:
+        acting = en_route & (d < interaction_radius).any(-1)
+    if yield_radius is None:
+        return acting
+    return acting | ((d < yield_radius) & en_route[..., None, :]).any(-1)
+
+
+def layout(n: int, scale: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """4 envs of n agents in the same square (so that pairs across envs would be found), a third
+    of them parked on their goals."""
+    rng = np.random.default_rng(seed)
+    side = 2.5 * np.sqrt(n) * scale
+    positions = rng.uniform(0, side, (4, n, 2))
+    goals = np.where(rng.random((4, n, 1)) < 0.33, positions, rng.uniform(0, side, (4, n, 2)))
+    return positions, goals
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
+@pytest.mark.parametrize("n", [2, 12, 90])
+@pytest.mark.parametrize("yield_radius", [None, 1.25])
+def test_only_agents_with_someone_near_act_with_an_interaction_radius(n, scale, yield_radius):
+    """Against every pair, envs side by side, any units: an agent en route acts only with
+    another agent of its env within the interaction radius (yielding unchanged)."""
+    positions, goals = layout(n, scale, 7 * n)
+    y = None if yield_radius is None else yield_radius * scale
+    got = Residual(0.5 * scale, yield_radius=y, interaction_radius=2.0 * scale).open(
+        positions, goals
+    )
+    want = dense_open(positions, goals, 0.5 * scale, y, 2.0 * scale)
+    assert np.array_equal(got, want)
+    en_route = np.linalg.norm(positions - goals, axis=-1) >= 0.5 * scale
+    assert (en_route & ~want).any()  # someone en route and alone is left to the script
+    assert want.any()
+
+
+def test_an_agent_alone_follows_the_script_with_an_interaction_radius():
+    """Two agents 10 m apart, each residual cancelling its scripted command: without an
+    interaction radius they stay; with one of 2 m, nobody is near, so the script moves them."""
+    kw = dict(start=((0.0, 0.0), (10.0, 0.0)), safety_filter=False)
+    for radius, moves in ((None, False), (2.0, True)):
+        venv = BatchedEnv("position_swap", action="residual", interaction_radius=radius, **kw)
+        venv.reset(seed=0)
+        before = venv.sim.state.positions.copy()
+        venv.step(-venv.nominal_actions())
+        moved = np.linalg.norm(venv.sim.state.positions - before, axis=-1)
+        assert (moved > 0.01).all() == moves and ((moved < 1e-12).all() != moves)
 
 
 @pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
@@ -171,8 +222,9 @@ def test_a_parked_agent_steps_aside_only_when_it_may_yield(yield_radius, moves):
 
 
 @pytest.mark.parametrize("value", [0.0, -1.0, float("nan"), float("inf"), "1", True, 1j])
-def test_a_bad_yield_radius_is_refused(value):
-    with pytest.raises(ValueError, match="yield_radius"):
-        BatchedEnv("crowd", num_agents=3, action="residual", yield_radius=value)
-    with pytest.raises(ValueError, match="yield_radius"):
-        wrappers.ResidualAction(rsvo_env.parallel_env("crowd"), yield_radius=value)
+@pytest.mark.parametrize("name", ["yield_radius", "interaction_radius"])
+def test_a_bad_yield_or_interaction_radius_is_refused(value, name):
+    with pytest.raises(ValueError, match=name):
+        BatchedEnv("crowd", num_agents=3, action="residual", **{name: value})
+    with pytest.raises(ValueError, match=name):
+        wrappers.ResidualAction(rsvo_env.parallel_env("crowd"), **{name: value})

@@ -81,6 +81,9 @@ def test_time_limit_stops_training_and_saves(tmp_path):
         (["--time-limit", "0"], ["time-limit"]),
         (["--timesteps", "0"], ["timesteps", "0"]),
         (["--set", "ppo.policy_kwargs.activation_fn=gelu"], ["activation_fn", "gelu", "relu"]),
+        (["--set", "validation.max_steps=0"], ["validation.max_steps", "0"]),
+        (["--set", "validation.max_steps=2.5"], ["validation.max_steps", "2.5"]),
+        (["--set", "validation.max_steps=true"], ["validation.max_steps", "True"]),
     ],
 )
 def test_bad_configs_fail_before_training_naming_the_field(tmp_path, capsys, extra, words):
@@ -99,6 +102,21 @@ def test_every_scenario_has_a_valid_config_with_gamma_dt_at_most_one():
         assert env.sim.filters[0].config.gamma * env.scenario.params["dt"] <= 1.0
     names = {p.stem for p in configs.CONFIG_DIR.glob("*.yaml")}
     assert names == {"circular_swap", "crowd", "position_swap", "ramp_merge"}
+
+
+def test_validation_and_evaluation_episodes_have_their_own_time_cap():
+    """``validation.max_steps`` caps the episodes of validation and evaluation, not training's;
+    a policy that stands still runs into whichever cap applies."""
+    cfg = configs.resolve(configs.load("circular_swap"))
+
+    def still(obs, env):
+        return np.zeros((*obs.shape[:-1], 2))
+
+    cfg["action"] = "direct"
+    assert set(run_episodes(cfg, still, 2, seed=0)["steps"]) == {cfg["env"]["max_steps"]}
+    cfg["validation"]["max_steps"] = 37
+    assert set(run_episodes(cfg, still, 2, seed=0)["steps"]) == {37}
+    assert configs.make_env(cfg, num_envs=1).sim.max_steps == cfg["env"]["max_steps"] != 37
 
 
 def test_zero_residual_is_the_scripted_controller_on_the_same_seeds():
@@ -153,6 +171,12 @@ def test_readme_states_the_crowd_config_as_it_is():
     assert "15 M agent-steps" in text and cfg["timesteps"] == 15_000_000
     assert "observes its neighbours' goals" in text
     assert "rel_goal" in [f.name for f in observation.NEIGHBOR_FEATURES]
+    assert "`interaction_radius: 2.0`" in text and "nobody within 2 m" in text
+    assert env.sim.residual.interaction_radius == 2.0 == cfg["interaction_radius"]
+    assert "`stall_clock: 50`" in text and env.sim.stall.unit == 50
+    assert "episodes end after 40 s" in text and env.sim.max_steps * env.sim.dt == 40.0
+    assert "evaluated with a 100 s cap" in text and cfg["validation"]["max_steps"] == 1000
+    assert env.single_observation_space.shape == (observation.size(5, stall=True),)
 
 
 def test_sac_trains_and_evaluates_through_the_same_entry_points(tmp_path):

@@ -7,6 +7,7 @@ import warnings
 from pathlib import Path
 
 import gymnasium
+import numpy as np
 import pytest
 
 import rsvo_env
@@ -69,6 +70,13 @@ def test_fixed_size_scenarios_refuse_other_counts(name):
 def test_agent_count_must_be_an_integer_of_at_least_two(count):
     with pytest.raises(ValueError, match=r"crowd.num_agents = .* must be an integer >= 2"):
         rsvo_env.parallel_env("crowd", num_agents=count)
+
+
+@pytest.mark.parametrize("steps", [0, -5, 2.0, "400", True, np.bool_(True)])
+def test_the_step_limit_must_be_an_integer_of_at_least_one(steps):
+    """A bool is not a step count (True was once taken as a limit of one step)."""
+    with pytest.raises(ValueError, match=r"crowd.max_steps = .* must be an integer >= 1"):
+        rsvo_env.parallel_env("crowd", num_agents=4, max_steps=steps)
 
 
 def test_unknown_reset_options_warn_once_and_name_the_known_ones():

@@ -13,6 +13,7 @@ from typing import Any
 
 import yaml
 
+from rsvo_env.validation import check_count
 from rsvo_env.vector import BatchedEnv
 
 CONFIG_DIR = Path(__file__).parent / "configs"
@@ -21,7 +22,7 @@ ACTIONS = ("direct", "residual")
 WEIGHTINGS = ("asymmetric", "symmetric")
 TOP_KEYS = {
     "scenario", "algo", "action", "gate_radius", "residual_right_hand", "residual_scale",
-    "yield_radius", "weighting", "num_envs",
+    "yield_radius", "interaction_radius", "weighting", "num_envs",
     "timesteps", "env", "ppo", "sac", "validation", "checkpoint_every", "seed", "threads",
     "engine", "rllib",
 }  # fmt: skip
@@ -99,6 +100,9 @@ def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
     val.setdefault("every", 0)
     val.setdefault("episodes", 20)
     val.setdefault("seed", 900_000)
+    # the time cap of validation and evaluation episodes (None: the training episodes' own)
+    if val.setdefault("max_steps", None) is not None:
+        check_count(val["max_steps"], "validation.max_steps", 1)
     out.setdefault("checkpoint_every", 0)
     return out
 
@@ -121,14 +125,15 @@ def hyperparameters(cfg: dict[str, Any]) -> dict[str, Any]:
     return hyper
 
 
-def residual_settings(cfg: dict[str, Any]) -> tuple[float, bool, float, float | None]:
+def residual_settings(cfg: dict[str, Any]) -> tuple[float, bool, float, float | None, float | None]:
     """A config's residual mode, the env's defaults where it is silent: gate radius, right-hand
-    rule, scale, yield radius."""
+    rule, scale, yield radius, interaction radius."""
     return (
         cfg.get("gate_radius", 0.5),
         cfg.get("residual_right_hand", True),
         cfg.get("residual_scale", 1.0),
         cfg.get("yield_radius"),
+        cfg.get("interaction_radius"),
     )
 
 
@@ -141,7 +146,7 @@ def make_env(
 ) -> BatchedEnv:
     """The filtered batched env a config describes (``action``/``weighting``: another choice,
     e.g. ``action="direct"`` for the scripted controller under the same protocol)."""
-    gate, right_hand, scale, yield_radius = residual_settings(cfg)
+    gate, right_hand, scale, yield_radius, interaction_radius = residual_settings(cfg)
     return BatchedEnv(
         cfg["scenario"],
         num_envs=num_envs,
@@ -150,6 +155,7 @@ def make_env(
         residual_right_hand=right_hand,
         residual_scale=scale,
         yield_radius=yield_radius,
+        interaction_radius=interaction_radius,
         weighting=weighting or cfg["weighting"],
         **{**cfg["env"], **env_overrides},
     )

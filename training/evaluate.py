@@ -19,6 +19,7 @@ from typing import Any
 
 from training import config as configs
 from training.evaluation import (
+    evaluation_cap,
     model_policy,
     paired,
     record_gif,
@@ -77,6 +78,7 @@ def evaluate(
         "episodes": episodes,
         "seed": seed,
         "weighting": weighting or cfg["weighting"],
+        "max_steps": evaluation_cap(cfg),
         "policy": summarize(learned),
     }
     if compare_scripted:
@@ -110,7 +112,10 @@ def main(argv: list[str] | None = None) -> int:
         )
     except ValueError as err:
         p.exit(2, f"{p.prog}: error: {err}\n")
-    print(f"{args.episodes} episodes, seeds {args.seed}..{args.seed + args.episodes - 1}")
+    print(
+        f"{args.episodes} episodes, seeds {args.seed}..{args.seed + args.episodes - 1}, "
+        f"each capped at {result['max_steps']} steps"
+    )
     print(describe("policy", result["policy"]))
     if args.compare_scripted:
         print(describe("scripted", result["scripted"]))

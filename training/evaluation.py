@@ -49,6 +49,13 @@ def scripted_policy(obs: NDArray[np.float32], env: Any) -> NDArray:
     return env.nominal_actions()
 
 
+def evaluation_cap(cfg: dict[str, Any]) -> int:
+    """The time cap (steps) of validation and evaluation episodes: ``validation.max_steps``, or
+    the training episodes' ``env.max_steps`` (or the scenario's default)."""
+    cap = cfg.get("validation", {}).get("max_steps")
+    return cap if cap is not None else make_env(cfg, num_envs=1).sim.max_steps
+
+
 def run_episodes(
     cfg: dict[str, Any],
     policy: Policy,
@@ -57,8 +64,10 @@ def run_episodes(
     action: str | None = None,
     weighting: str | None = None,
 ) -> dict[str, NDArray]:
-    """One episode per seed ``seed, ..., seed + episodes - 1``, all stepped together."""
-    env = make_env(cfg, num_envs=episodes, action=action, weighting=weighting)
+    """One episode per seed ``seed, ..., seed + episodes - 1``, all stepped together, each
+    capped at :func:`evaluation_cap` steps."""
+    cap = evaluation_cap(cfg)
+    env = make_env(cfg, num_envs=episodes, action=action, weighting=weighting, max_steps=cap)
     obs, _ = env.reset(seed=seed)
     dt, u_max = env.scenario.params["dt"], env.scenario.u_max
     E, N = env.num_envs, env.num_agents

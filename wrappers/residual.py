@@ -4,8 +4,10 @@ The learner outputs a residual; the env adds it to the scripted move-to-goal com
 without the right-hand rule), gates it off within ``gate_radius`` of the agent's goal (where the
 scripted controller already holds the agent inside the goal tolerance) unless, with
 ``yield_radius``, a neighbour still en route is that close, and holds the sum to the
-speed limit like every other command. The safety filter, when on, filters the sum. A thin
-``BaseParallelWrapper``: it switches the core's residual mode and overrides nothing.
+speed limit like every other command. With ``interaction_radius``, an agent en route with no
+other agent that close follows the scripted command alone. The safety filter, when on, filters
+the sum. A thin ``BaseParallelWrapper``: it switches the core's residual mode and overrides
+nothing.
 
 With it, the scripted controller is the zero action; ``nominal_actions()`` still gives the
 scripted command itself (for a direct-action env), not a residual.
@@ -23,8 +25,9 @@ class ResidualAction(BaseParallelWrapper):
     ignored; ``right_hand``: whether the scripted command includes the right-hand rule;
     ``scale``: the residual's largest norm in speed limits (2 lets it reverse a full-speed
     command, 1 only turn it); ``yield_radius``: with it, a parked agent's residual acts again
-    while a neighbour still en route is closer than this (physical units), so it may step aside
-    (:class:`rsvo_env.residual.Residual`)."""
+    while a neighbour still en route is closer than this (physical units), so it may step aside;
+    ``interaction_radius``: with it, the residual of an agent en route acts only while another
+    agent is closer than this (:class:`rsvo_env.residual.Residual`)."""
 
     def __init__(
         self,
@@ -33,8 +36,10 @@ class ResidualAction(BaseParallelWrapper):
         right_hand: bool = True,
         scale: float = 1.0,
         yield_radius: float | None = None,
+        interaction_radius: float | None = None,
     ) -> None:
         super().__init__(env)
-        env.unwrapped.set_residual(gate_radius, right_hand, scale, yield_radius)
+        radii = (yield_radius, interaction_radius)
+        env.unwrapped.set_residual(gate_radius, right_hand, scale, *radii)
         self.gate_radius, self.right_hand, self.scale = gate_radius, right_hand, scale
-        self.yield_radius = yield_radius
+        self.yield_radius, self.interaction_radius = radii

@@ -1,0 +1,64 @@
+"""The stall clock: how long each agent has gone without coming closer to its goal.
+
+A memoryless policy in a configuration that does not change (two agents each waiting for the
+other, an agent holding still short of its goal) outputs the same action at every step, for
+ever. The clock is an observed value that keeps moving exactly there, so a policy can learn to
+leave such fixed points (``Simulator(stall_clock=...)``; off by default).
+
+An agent makes progress when its distance to its goal falls below the least distance it has had
+since it last made progress, by at least ``PROGRESS`` safety radii (a relative step, so the
+clock reads the same in any unit of length). An agent at its goal is not stalled.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rsvo_env import planar
+from rsvo_env.validation import check_count
+
+PROGRESS = 0.02  # safety radii closer to the goal that count as progress
+
+
+@dataclass
+class StallClock:
+    """Per agent (E, N): the distance to beat (``best``) and the steps since the last progress.
+    The observed value is ``steps / unit`` (``unit``: steps)."""
+
+    unit: int
+    best: NDArray[np.float64]
+    steps: NDArray[np.int64]
+
+    @classmethod
+    def create(cls, unit: int, num_envs: int, n: int) -> StallClock:
+        unit = check_count(unit, "stall_clock", 1)
+        return cls(unit, np.full((num_envs, n), np.inf), np.zeros((num_envs, n), dtype=np.int64))
+
+    def reset(self, envs: NDArray[np.int64], distance: NDArray[np.float64]) -> None:
+        """New episodes in ``envs``; ``distance`` (len(envs), N) to the goals at the start."""
+        self.best[envs] = distance
+        self.steps[envs] = 0
+
+    def tick(
+        self, distance: NDArray[np.float64], at_goal: NDArray[np.bool_], safety_radius: float
+    ) -> None:
+        """One step of every env: ``distance`` (E, N) to the goals after it."""
+        moved_on = (distance <= self.best - PROGRESS * safety_radius) | at_goal
+        self.best = np.where(moved_on, distance, self.best)
+        self.steps = np.where(moved_on, 0, self.steps + 1)
+
+    def value(self, envs: NDArray[np.int64] | slice = slice(None)) -> NDArray[np.float64]:
+        """The observed clock (E, N) (of ``envs``): steps stalled over ``unit``."""
+        return self.steps[envs] / self.unit
+
+    def bound(self, max_steps: int) -> float:
+        """The largest value an episode of ``max_steps`` steps can show."""
+        return max_steps / self.unit
+
+
+def goal_distance(positions: NDArray[np.float64], goals: NDArray[np.float64]) -> NDArray:
+    """Each agent's distance to its goal, (..., N)."""
+    return planar.norm(goals - positions)
