@@ -13,7 +13,7 @@ from its own goal) is closer than ``yield_radius``: the policy may then step asi
 scripted command brings the agent back once the neighbour has gone.
 
 A policy trained to hold still near its goal (to let a neighbour pass) tends to hold still there
-with nobody around too, for ever. With ``interaction_radius`` the residual of an agent en route
+with nobody around too. With ``interaction_radius`` the residual of an agent en route
 acts only while another agent is closer than that: alone, an agent follows the scripted command,
 which is what an agent alone should do.
 """
