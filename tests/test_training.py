@@ -3,6 +3,7 @@
 import csv
 import json
 
+import imageio.v2 as imageio
 import numpy as np
 import pytest
 import yaml
@@ -10,7 +11,7 @@ import yaml
 from rsvo_env import observation
 from training import config as configs
 from training import evaluate, train
-from training.evaluation import run_episodes, scripted_policy
+from training.evaluation import record_gif, run_episodes, scripted_policy
 from wrappers.sb3 import SB3VecEnv
 
 SMALL = [
@@ -104,7 +105,7 @@ def test_every_scenario_has_a_valid_config_with_gamma_dt_at_most_one():
     assert names == {"circular_swap", "crowd", "position_swap", "ramp_merge"}
 
 
-def test_validation_and_evaluation_episodes_have_their_own_time_cap():
+def test_validation_and_evaluation_episodes_have_their_own_time_cap(tmp_path):
     """``validation.max_steps`` caps the episodes of validation and evaluation, not training's;
     a policy that stands still runs into whichever cap applies."""
     cfg = configs.resolve(configs.load("circular_swap"))
@@ -117,6 +118,10 @@ def test_validation_and_evaluation_episodes_have_their_own_time_cap():
     cfg["validation"]["max_steps"] = 37
     assert set(run_episodes(cfg, still, 2, seed=0)["steps"]) == {37}
     assert configs.make_env(cfg, num_envs=1).sim.max_steps == cfg["env"]["max_steps"] != 37
+    # the GIF of an evaluation too: a frame at the reset and one a step
+    cfg["validation"]["max_steps"] = 4
+    gif = record_gif(cfg, still, 0, str(tmp_path / "still.gif"))
+    assert len(imageio.mimread(gif)) == 5
 
 
 def test_zero_residual_is_the_scripted_controller_on_the_same_seeds():

@@ -142,9 +142,11 @@ def record_gif(
     fps: int = 10,
 ) -> str:
     """One seeded episode of the filtered ParallelEnv, driven by ``policy``, as a GIF played at
-    ``fps`` frames a second (one frame a step: real time when ``fps = 1 / dt``)."""
+    ``fps`` frames a second (one frame a step: real time when ``fps = 1 / dt``), capped as the
+    evaluation's episodes are (:func:`evaluation_cap`)."""
     from rsvo_env.rendering import save_gif
 
+    cfg = {**cfg, "env": {**cfg["env"], "max_steps": evaluation_cap(cfg)}}
     env = make_parallel(cfg, render_mode="rgb_array", action=action)
     obs, _ = env.reset(seed=seed)
     agents = list(env.possible_agents)
