@@ -233,20 +233,10 @@ class Simulator:
         nearest neighbours, who is at its goal and whom the right-hand rule turns."""
         post_step.derive(self)
 
-    def set_residual(
-        self,
-        gate_radius: float | None,
-        right_hand: bool = True,
-        scale: float = 1.0,
-        yield_radius: float | None = None,
-        interaction_radius: float | None = None,
-    ) -> None:
-        """Residual actions (``gate_radius=None``: off): each action is added to the scripted
-        command, gated off near the goal (:class:`rsvo_env.residual.Residual`)."""
-        self.residual = None
-        if gate_radius is not None:
-            radii = (yield_radius, interaction_radius)
-            self.residual = Residual(gate_radius, right_hand, scale, *radii)
+    def set_residual(self, residual: Residual | None) -> None:
+        """Residual actions by ``residual``'s rule (None: off): each action is added to the
+        scripted command, gated off near the goal (:class:`rsvo_env.residual.Residual`)."""
+        self.residual = residual
 
     def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by

@@ -20,6 +20,7 @@ from pettingzoo.utils import BaseWrapper
 from rsvo_env.factory import make_simulator
 from rsvo_env.metrics import FLAT_FIELDS, EpisodeMetrics
 from rsvo_env.rendering import TRAIL, Renderer
+from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting, check_weighting
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario
@@ -130,16 +131,10 @@ class RSVOParallelEnv(ParallelEnv):
         if self._started:
             self.sim.set_weighting(0, mode)
 
-    def set_residual(
-        self,
-        gate_radius: float | None,
-        right_hand: bool = True,
-        scale: float = 1.0,
-        yield_radius: float | None = None,
-        interaction_radius: float | None = None,
-    ) -> None:
-        """Residual actions on or off; see ``wrappers.ResidualAction``."""
-        self.sim.set_residual(gate_radius, right_hand, scale, yield_radius, interaction_radius)
+    def set_residual(self, residual: Residual | None) -> None:
+        """Residual actions by ``residual``'s rule, or off (None); see
+        ``wrappers.ResidualAction``."""
+        self.sim.set_residual(residual)
 
     def add_safety_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
         """Turn on (another) filter stage of the core's step; see ``wrappers.RCBFSafetyFilter``."""

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rsvo_env.factory import FILTER_KEYWORDS, filter_config, make_simulator
+from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario
@@ -82,7 +83,9 @@ class BatchedEnv:
             raise ValueError(f"action = {action!r}; use 'direct' or 'residual'")
         if action == "residual":
             radii = (yield_radius, interaction_radius)
-            self.sim.set_residual(gate_radius, residual_right_hand, residual_scale, *radii)
+            self.sim.set_residual(
+                Residual(gate_radius, residual_right_hand, residual_scale, *radii)
+            )
         self.num_envs, self.num_agents = self.sim.num_envs, self.sim.n
         self.single_observation_space, self.single_action_space = self.sim.spaces()
         low, high = self.single_observation_space.low, self.single_observation_space.high

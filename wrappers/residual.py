@@ -19,6 +19,8 @@ from typing import Any
 
 from pettingzoo.utils import BaseParallelWrapper
 
+from rsvo_env.residual import Residual
+
 
 class ResidualAction(BaseParallelWrapper):
     """``gate_radius``: distance to the goal (physical units) under which the residual is
@@ -40,6 +42,6 @@ class ResidualAction(BaseParallelWrapper):
     ) -> None:
         super().__init__(env)
         radii = (yield_radius, interaction_radius)
-        env.unwrapped.set_residual(gate_radius, right_hand, scale, *radii)
+        env.unwrapped.set_residual(Residual(gate_radius, right_hand, scale, *radii))
         self.gate_radius, self.right_hand, self.scale = gate_radius, right_hand, scale
         self.yield_radius, self.interaction_radius = radii
