@@ -168,8 +168,9 @@ def limit_threads(threads: int) -> None:
     import numba
     import torch
 
-    torch.set_num_threads(threads)
+    # numba first: starting its threading layer can reset the OpenMP thread count torch reads
     numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    torch.set_num_threads(threads)
 
 
 def save(cfg: dict[str, Any], path: str | Path) -> None:
