@@ -20,7 +20,13 @@ import numpy as np
 
 from training.config import limit_threads
 from training.evaluate import load_model
-from training.evaluation import paired, run_episodes, scripted_policy, summarize
+from training.evaluation import (
+    evaluation_cap,
+    paired,
+    run_episodes,
+    scripted_policy,
+    summarize,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 EPISODES, SEED = 100, 1000
@@ -237,7 +243,9 @@ def rates(stats: list[dict]) -> str:
 
 def capped(run: Path | None, r: dict, cap: int) -> dict[str, float]:
     """A crowd run's policy (``run`` None: the scripted controller) on the held-out seeds with
-    evaluation episodes of ``cap`` steps."""
+    evaluation episodes of ``cap`` steps (:func:`evaluate` did it already at the run's own)."""
+    if evaluation_cap(r["cfg"]) == cap:
+        return r["scripted" if run is None else "policy"]
     cfg = {**r["cfg"], "validation": {**r["cfg"]["validation"], "max_steps": cap}}
     if run is None:
         return summarize(run_episodes(cfg, scripted_policy, EPISODES, SEED, "direct"))
