@@ -122,18 +122,21 @@ class EpisodeMetrics:
         self.min_barrier = np.full(E, np.inf)
         self.sums = np.zeros((E, n, 2))
         self.arrival = np.full((E, n), -1, dtype=np.int64)
-        # named views of the packed arrays
-        self.steps = self.counts[:, 0]
-        self.deadlock_onset = self.counts[:, 1]
-        self.deadlock_resolved = self.counts[:, 2]
-        self.completed = self.counts[:, 3]
-        self.collision_steps = self.counts[:, 4]
-        self.path_length = self.sums[..., 0]
-        self.deviation = self.sums[..., 1]
         # the last step's smallest and mean nearest distance of each env
         self.step_series = np.zeros((E, 2))
         self.min_distance_series: list[float] = []
         self.avg_min_distance_series: list[float] = []
+
+    # Named columns of the packed arrays, taken afresh at each read: a view kept as an attribute
+    # would come unhooked from its base in a copy (deepcopy and pickle copy each array alone),
+    # and the copy's counters would stop counting.
+    steps = property(lambda self: self.counts[:, 0])
+    deadlock_onset = property(lambda self: self.counts[:, 1])
+    deadlock_resolved = property(lambda self: self.counts[:, 2])
+    completed = property(lambda self: self.counts[:, 3])
+    collision_steps = property(lambda self: self.counts[:, 4])
+    path_length = property(lambda self: self.sums[..., 0])
+    deviation = property(lambda self: self.sums[..., 1])
 
     def reset(self, envs: NDArray[np.int64]) -> None:
         """Start a new episode in the given envs."""

@@ -38,8 +38,17 @@ def r_svo(theta_i: ArrayLike, theta_j: ArrayLike) -> NDArray[np.float64] | float
 
 
 def _share(ti: NDArray, tj: NDArray) -> NDArray:
-    """``theta_i / (theta_i + theta_j)``, 0.5 where both are 0; inputs already validated."""
+    """``theta_i / (theta_i + theta_j)``, 0.5 where both are 0; inputs already validated.
+
+    Where the sum overflows (``1e308 + 1e308`` is inf, which made such a pair's weights sum
+    to 2) both scores are halved first: the same share, to rounding. Equal scores give exactly
+    1/2 at any magnitude."""
     total = ti + tj
+    if not np.isfinite(total).all():
+        ti, tj = np.broadcast_arrays(ti, tj)
+        big = ~np.isfinite(total)
+        ti, tj = np.where(big, 0.5 * ti, ti), np.where(big, 0.5 * tj, tj)
+        total = ti + tj
     safe = np.where(total > 0, total, 1.0)
     return np.where(total > 0, ti / safe, 0.5)
 

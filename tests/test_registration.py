@@ -1,13 +1,12 @@
 """The ids in gymnasium's and PettingZoo's registries, checked by their own checkers."""
 
-import subprocess
-import sys
 import warnings
 
 import gymnasium
 import numpy as np
 import pettingzoo
 import pytest
+from checkout import run_python
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from pettingzoo.test import api_test, parallel_api_test
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
@@ -56,7 +55,7 @@ def test_make_without_prior_import():
         "obs, _ = env.reset(seed=0)\n"
         "print(obs.shape)\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    out = run_python("-c", code)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "(330,)"  # 6 agents x (5 + 10 x 5 neighbours)
 

@@ -1,11 +1,10 @@
 """``rsvo reproduce --quick``: the tables' structure, the paper's claims, byte-for-byte reruns."""
 
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from checkout import run_python
 from PIL import Image
 
 from rsvo_env.cli.reproduce import reproduce
@@ -24,12 +23,7 @@ def runs(tmp_path_factory):
     """The command as a user runs it, from a folder outside the checkout, and the function."""
     elsewhere = tmp_path_factory.mktemp("elsewhere")
     before = checkout_state()
-    out = subprocess.run(
-        [sys.executable, "-m", "rsvo_env.cli", "reproduce", "--quick"],
-        cwd=elsewhere,
-        capture_output=True,
-        text=True,
-    )
+    out = run_python("-m", "rsvo_env.cli", "reproduce", "--quick", cwd=elsewhere)
     assert out.returncode == 0, out.stderr[-2000:]
     assert checkout_state() == before  # the checkout is untouched
     a = elsewhere / "rsvo-results"

@@ -91,3 +91,29 @@ def test_weight_matrix_callable_is_validated():
         weight_matrix([1.0, 2.0], lambda t: [[0.0, -0.5], [1.5, 0.0]])
     with pytest.raises(ValueError, match="unknown"):
         weight_matrix([1.0, 2.0], "selfish")
+
+
+# every magnitude a float holds, subnormals and the largest finite included
+any_score = st.floats(min_value=0.0, max_value=np.finfo(float).max, allow_infinity=False)
+
+
+@settings(max_examples=400, deadline=None)
+@given(any_score, any_score)
+def test_weights_sum_to_one_at_any_magnitude(ti, tj):
+    """No overflow: ``theta_i + theta_j`` of two huge scores is inf, which once gave 1.0 both
+    ways (a pair summing to 2)."""
+    wi, wj = responsibility_weight(ti, tj), responsibility_weight(tj, ti)
+    assert 0.0 <= wi <= 1.0 and 0.0 <= wj <= 1.0
+    assert wi + wj == pytest.approx(1.0, abs=1e-12)
+    assert r_svo(ti, tj) + r_svo(tj, ti) == pytest.approx(np.pi / 2, abs=1e-12)
+
+
+@pytest.mark.parametrize("t", [1e308, np.finfo(float).max, 1e-320, 5e-324, 1.0, 1e200])
+def test_equal_scores_give_one_half_at_any_magnitude(t):
+    assert responsibility_weight(t, t) == 0.5
+    assert r_svo(t, t) == np.pi / 4
+    W = weight_matrix(np.array([t, t, t]))
+    np.testing.assert_array_equal(W[~np.eye(3, dtype=bool)], 0.5)
+    assert responsibility_weight(1e308, 1e307) + responsibility_weight(1e307, 1e308) == (
+        pytest.approx(1.0, abs=1e-15)
+    )

@@ -2,13 +2,13 @@
 unused options, registered step limits, a project that points nowhere outside itself."""
 
 import subprocess
-import sys
 import warnings
 from pathlib import Path
 
 import gymnasium
 import numpy as np
 import pytest
+from checkout import run_python
 
 import rsvo_env
 
@@ -16,9 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def rsvo(*args, cwd=None):
-    return subprocess.run(
-        [sys.executable, "-m", "rsvo_env.cli", *args], capture_output=True, text=True, cwd=cwd
-    )
+    return run_python("-m", "rsvo_env.cli", *args, cwd=cwd)
 
 
 @pytest.mark.parametrize(
@@ -139,3 +137,17 @@ def test_committed_gifs_play_at_their_frame_rate():
             gif.seek(k)
             durations.add(gif.info["duration"])
         assert durations == {50}, (name, durations)  # 20 frames per second
+
+
+def test_subprocesses_run_the_checkout_under_test(tmp_path, monkeypatch):
+    """A stale ``rsvo_env`` earlier on the path (another install) must not be what the CLI
+    tests run: the checkout goes first."""
+    stale = tmp_path / "stale" / "rsvo_env"
+    stale.mkdir(parents=True)
+    (stale / "__init__.py").write_text("raise ImportError('a stale install was imported')\n")
+    monkeypatch.setenv("PYTHONPATH", str(stale.parent))
+    out = rsvo("--help", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    out = run_python("-c", "import rsvo_env; print(rsvo_env.__file__)", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert Path(out.stdout.strip()).resolve().is_relative_to(ROOT)
