@@ -32,7 +32,7 @@ from rsvo_env.safety import FilterResult, SafetyFilter, merge_stats
 from rsvo_env.scenarios import Scenario
 from rsvo_env.stall import StallClock, goal_distance
 from rsvo_env.state import State
-from rsvo_env.validation import check_count, check_real
+from rsvo_env.validation import check_count, check_real, real_array
 from rsvo_env.weights import Weights
 
 RESET_OPTIONS = ("theta", "weighting")
@@ -168,14 +168,22 @@ class Simulator:
             )
         theta = None
         if "theta" in options:
-            raw = np.asarray(options["theta"])
-            rows = raw.reshape(-1, self.n) if raw.ndim == 2 else [options["theta"]]
-            if raw.ndim == 2 and raw.shape[0] != self.num_envs:
+            raw = real_array(options["theta"], "theta")
+            # exactly (N,) (every env) or (E, N) (one row an env): nothing reshaped or broadcast
+            if raw.ndim == 1 and raw.shape != (self.n,):
+                raise ValueError(f"theta has {raw.shape[0]} entries, expected {self.n}")
+            if raw.shape not in ((self.n,), (self.num_envs, self.n)):
                 raise ValueError(
                     f"theta has shape {raw.shape}, expected ({self.n},) or "
                     f"({self.num_envs}, {self.n})"
                 )
-            checked = [self.scenario.check_theta(r) for r in rows]
+            rows = raw if raw.ndim == 2 else raw[None]
+            checked = []
+            for e, row in enumerate(rows):
+                try:
+                    checked.append(self.scenario.check_theta(row))
+                except ValueError as exc:
+                    raise ValueError(f"{exc} (env {e})" if raw.ndim == 2 else str(exc)) from None
             theta = np.broadcast_to(np.stack(checked), (self.num_envs, self.n))
         weighting = options.get("weighting", self.weighting)
         check_weighting(weighting, np.ones(self.n) if theta is None else theta[0])

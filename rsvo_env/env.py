@@ -25,7 +25,7 @@ from rsvo_env.responsibility import Weighting, check_weighting
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario
 from rsvo_env.state import World
-from rsvo_env.validation import check_action, check_action_dict
+from rsvo_env.validation import check_action, check_action_dict, check_flag, check_seed
 
 
 class EpisodeView:
@@ -73,20 +73,24 @@ class RSVOParallelEnv(ParallelEnv):
         render_mode: str | None = None,
         render_size: int = 600,
         keep_history: bool = False,
+        record_series: bool = False,
         **kwargs: Any,
     ) -> None:
         """``keep_history``: keep every step's positions in ``history`` (the whole trajectory);
         by default only the last ``TRAIL`` steps the renderer draws, so memory does not grow with
-        the episode. ``kwargs``: ``num_obs_neighbors``, ``frame``, ``weighting``,
+        the episode. ``record_series``: keep the per-step series the paper plots (each step's
+        smallest and mean nearest distance, ``min_distance_series`` and
+        ``avg_min_distance_series`` of :attr:`episode_metrics`); off by default, for the same
+        reason. ``kwargs``: ``num_obs_neighbors``, ``frame``, ``weighting``,
         ``reward_progress``, ``reward_time``, ``reward_goal``, ``reward_team``, ``stall_clock``,
         ``max_cycles``, and every scenario parameter."""
-        if not isinstance(keep_history, (bool, np.bool_)):
-            raise ValueError(f"keep_history = {keep_history!r} must be True or False")
+        keep_history = check_flag(keep_history, "keep_history")
+        record_series = check_flag(record_series, "record_series")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode = {render_mode!r}; use one of {self.metadata['render_modes']}"
             )
-        self.sim = make_simulator(scenario, num_envs=1, record_series=True, **kwargs)
+        self.sim = make_simulator(scenario, num_envs=1, record_series=record_series, **kwargs)
         self.scenario = self.sim.scenario
         # what print(env) shows, through any PettingZoo wrapper: the scenario, PettingZoo-style
         self.metadata = {**self.metadata, "name": f"rsvo_{self.scenario.name}_v0"}
@@ -151,6 +155,7 @@ class RSVOParallelEnv(ParallelEnv):
         self, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, NDArray[np.float32]], dict[str, dict[str, Any]]]:
         # Options are checked before any draw, so a refused reset leaves the generator as it was.
+        seed = check_seed(seed)
         theta, weighting = self.sim.check_options(options)
         self.sim.reset([0], [seed], theta, weighting)
         self._started = True

@@ -11,8 +11,21 @@ from numpy.typing import NDArray
 
 from rsvo_env import barriers
 from rsvo_env.responsibility import WEIGHTING_MODES, Weighting
+from rsvo_env.validation import real_array
 
 DYNAMICS = ("single_integrator", "double_integrator")
+
+
+def _box_bound(value: object, name: str) -> NDArray[np.float64]:
+    """A bound of the input box, one number or one per component, as (2,) floats; strings,
+    bools and complex numbers are refused (numpy would read ``"3"`` as 3.0 and ``True`` as 1.0).
+    Finiteness and order are checked by the caller, on both bounds."""
+    arr = real_array(value, f"FilterConfig.{name}")
+    if arr.shape not in ((), (2,)):
+        raise ValueError(
+            f"FilterConfig.{name} has shape {arr.shape}: give one number or one per component (2,)"
+        )
+    return np.broadcast_to(arr, (2,)).copy()
 
 
 @dataclass(frozen=True)
@@ -69,11 +82,8 @@ class FilterConfig:
                 )
         if self.neighbor_radius is not None:
             positive("neighbor_radius", self.neighbor_radius)
-        hi = np.broadcast_to(np.asarray(self.u_max, dtype=np.float64), (2,)).copy()
-        if self.u_min is None:
-            lo = -hi
-        else:
-            lo = np.broadcast_to(np.asarray(self.u_min, dtype=np.float64), (2,)).copy()
+        hi = _box_bound(self.u_max, "u_max")
+        lo = -hi if self.u_min is None else _box_bound(self.u_min, "u_min")
         if not (np.isfinite(lo).all() and np.isfinite(hi).all()) or not (lo < hi).all():
             raise ValueError(
                 f"FilterConfig needs finite u_min < u_max per component, got "

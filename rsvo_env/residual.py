@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rsvo_env import grid, planar
-from rsvo_env.validation import check_positive, check_real
+from rsvo_env.validation import check_flag, check_positive, check_real
 
 
 @dataclass(frozen=True)
@@ -49,15 +49,16 @@ class Residual:
             raise ValueError(f"gate_radius = {self.gate_radius!r} must be >= 0")
         object.__setattr__(self, "gate_radius", gate)
         object.__setattr__(self, "scale", check_positive(self.scale, "residual scale"))
-        object.__setattr__(self, "right_hand", bool(self.right_hand))
+        object.__setattr__(self, "right_hand", check_flag(self.right_hand, "right_hand"))
         for name in ("yield_radius", "interaction_radius"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, check_positive(getattr(self, name), name))
 
     def open(self, positions: NDArray[np.float64], goals: NDArray[np.float64]) -> NDArray:
-        """(E, N): whose residual acts. En route (at least ``gate_radius`` from the goal) and,
-        with ``interaction_radius``, closer than it to another agent of the same env; or, with
-        ``yield_radius``, closer than that to a neighbour of the same env that is en route."""
+        """(E, N): whose residual acts. An agent en route (at least ``gate_radius`` from its
+        goal): always, or with ``interaction_radius`` only while closer than it to another agent
+        of the same env. A parked agent (within ``gate_radius``): with ``yield_radius``, while
+        closer than that to a neighbour of the same env that is en route; else never."""
         en_route = planar.norm(positions - goals) >= self.gate_radius
         radii = [r for r in (self.yield_radius, self.interaction_radius) if r is not None]
         if not radii or (self.interaction_radius is None and en_route.all()):
@@ -73,9 +74,10 @@ class Residual:
             near[i[close]] = near[j[close]] = True
             opened &= near
         if self.yield_radius is not None:
+            # only a parked agent yields: an agent en route is governed by the gate above
             close = d < self.yield_radius
-            opened[i[close & flat[j]]] = True
-            opened[j[close & flat[i]]] = True
+            opened[i[close & flat[j] & ~flat[i]]] = True
+            opened[j[close & flat[i] & ~flat[j]]] = True
         return opened.reshape(en_route.shape)
 
     def controls(

@@ -148,6 +148,25 @@ def check_count(value: int, name: str, least: int) -> int:
     return int(value)
 
 
+def check_seed(seed: int | None, name: str = "seed") -> int | None:
+    """None or an integer >= 0 (not a bool, a float such as 1.5 or 2.0, or a string), as
+    Gymnasium's seeding takes it."""
+    if seed is None:
+        return None
+    integer = isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_))
+    if not integer or seed < 0:
+        raise ValueError(f"{name} = {seed!r} must be None or an integer >= 0")
+    return int(seed)
+
+
+def check_flag(value: bool, name: str) -> bool:
+    """True or False (a bool or numpy bool; not a string such as ``"False"``, which is truthy,
+    nor 0 and 1)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} = {value!r} must be True or False")
+    return bool(value)
+
+
 def check_positive(value: float, name: str) -> float:
     """A finite real number > 0 (not a bool or a string)."""
     if isinstance(value, (bool, np.bool_, str, bytes)):

@@ -18,7 +18,7 @@ from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario
-from rsvo_env.validation import check_vectors
+from rsvo_env.validation import check_flag, check_seed, check_vectors
 
 
 class BatchedEnv:
@@ -69,6 +69,13 @@ class BatchedEnv:
         ``neighbor_radius``; ``num_obs_neighbors``, ``frame``, ``weighting``, ``reward_*``,
         ``max_cycles``; and every scenario parameter."""
         filter_kwargs = {k: kwargs.pop(k) for k in FILTER_KEYWORDS if k in kwargs}
+        safety_filter = check_flag(safety_filter, "safety_filter")
+        if action not in ("direct", "residual"):
+            raise ValueError(f"action = {action!r}; use 'direct' or 'residual'")
+        # checked whatever the action mode: a bad value is refused, not ignored
+        residual = Residual(
+            gate_radius, residual_right_hand, residual_scale, yield_radius, interaction_radius
+        )
         self.sim = make_simulator(scenario, num_envs=num_envs, **kwargs)
         self.scenario = self.sim.scenario
         if safety_filter:
@@ -79,13 +86,8 @@ class BatchedEnv:
                 f"filter parameters {sorted(filter_kwargs) or ['intervention_penalty']} need "
                 "safety_filter=True"
             )
-        if action not in ("direct", "residual"):
-            raise ValueError(f"action = {action!r}; use 'direct' or 'residual'")
         if action == "residual":
-            radii = (yield_radius, interaction_radius)
-            self.sim.set_residual(
-                Residual(gate_radius, residual_right_hand, residual_scale, *radii)
-            )
+            self.sim.set_residual(residual)
         self.num_envs, self.num_agents = self.sim.num_envs, self.sim.n
         self.single_observation_space, self.single_action_space = self.sim.spaces()
         low, high = self.single_observation_space.low, self.single_observation_space.high
@@ -102,6 +104,7 @@ class BatchedEnv:
         self, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, NDArray]]:
         """Reset every env; env e is seeded with ``seed + e`` (all unseeded: seed None)."""
+        seed = check_seed(seed)
         theta, weighting = self.sim.check_options(options)
         seeds = (
             [None] * self.num_envs

@@ -130,8 +130,8 @@ def test_a_bad_residual_scale_is_refused(scale):
 
 def dense_open(positions, goals, gate, yield_radius, interaction_radius=None):
     """Reference: en route (and, with ``interaction_radius``, closer than it to another agent
-    of the same env), or closer than ``yield_radius`` to another agent of the same env that is
-    en route (every pair tested)."""
+    of the same env), or parked and closer than ``yield_radius`` to another agent of the same
+    env that is en route (every pair tested)."""
     en_route = np.linalg.norm(positions - goals, axis=-1) >= gate
     d = np.linalg.norm(positions[..., :, None, :] - positions[..., None, :, :], axis=-1)
     n = d.shape[-1]
@@ -141,7 +141,7 @@ def dense_open(positions, goals, gate, yield_radius, interaction_radius=None):
         acting = en_route & (d < interaction_radius).any(-1)
     if yield_radius is None:
         return acting
-    return acting | ((d < yield_radius) & en_route[..., None, :]).any(-1)
+    return acting | (~en_route & ((d < yield_radius) & en_route[..., None, :]).any(-1))
 
 
 def layout(n: int, scale: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -156,7 +156,7 @@ def layout(n: int, scale: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
 
 @pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
 @pytest.mark.parametrize("n", [2, 12, 90])
-@pytest.mark.parametrize("yield_radius", [None, 1.25])
+@pytest.mark.parametrize("yield_radius", [None, 1.25, 3.0])
 def test_only_agents_with_someone_near_act_with_an_interaction_radius(n, scale, yield_radius):
     """Against every pair, envs side by side, any units: an agent en route acts only with
     another agent of its env within the interaction radius (yielding unchanged)."""
@@ -228,3 +228,15 @@ def test_a_bad_yield_or_interaction_radius_is_refused(value, name):
         BatchedEnv("crowd", num_agents=3, action="residual", **{name: value})
     with pytest.raises(ValueError, match=name):
         wrappers.ResidualAction(rsvo_env.parallel_env("crowd"), **{name: value})
+
+
+def test_yielding_never_reopens_an_agent_en_route():
+    """The yield rule is for parked agents: two agents 2 m apart, both far from their goals,
+    with yield_radius 3 > interaction_radius 1, are alone as far as the gate goes."""
+    positions = np.array([[[0.0, 0.0], [2.0, 0.0]]])
+    goals = np.array([[[50.0, 0.0], [-50.0, 0.0]]])
+    residual = Residual(0.5, yield_radius=3.0, interaction_radius=1.0)
+    assert not residual.open(positions, goals).any()
+    # one of them parked: it may yield to the other, which stays alone
+    goals[0, 0] = positions[0, 0]
+    assert residual.open(positions, goals).tolist() == [[True, False]]

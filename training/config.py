@@ -13,22 +13,39 @@ from typing import Any
 
 import yaml
 
-from rsvo_env.validation import check_count
 from rsvo_env.vector import BatchedEnv
+from training import schema
 
 CONFIG_DIR = Path(__file__).parent / "configs"
 ALGOS = ("ppo", "sac")
 ACTIONS = ("direct", "residual")
 WEIGHTINGS = ("asymmetric", "symmetric")
-TOP_KEYS = {
-    "scenario", "algo", "action", "gate_radius", "residual_right_hand", "residual_scale",
-    "yield_radius", "interaction_radius", "weighting", "num_envs",
-    "timesteps", "env", "ppo", "sac", "validation", "checkpoint_every", "seed", "threads",
-    "engine", "rllib",
-}  # fmt: skip
 ENGINES = ("sb3", "rllib")
 # the activations a config may name for an SB3 policy (``policy_kwargs.activation_fn``)
 ACTIVATIONS = ("tanh", "relu")
+# every top-level key and its check; the sections' own keys are checked in theirs
+TOP: dict[str, schema.Check] = {
+    "scenario": schema.text,
+    "algo": schema.choice(ALGOS),
+    "action": schema.choice(ACTIONS),
+    "gate_radius": schema.real(),
+    "residual_right_hand": schema.flag,
+    "residual_scale": schema.real(positive=True),
+    "yield_radius": schema.optional(schema.real(positive=True)),
+    "interaction_radius": schema.optional(schema.real(positive=True)),
+    "weighting": schema.choice(WEIGHTINGS),
+    "num_envs": schema.integer(1),
+    "timesteps": schema.integer(1),
+    "env": schema.mapping,
+    "ppo": schema.mapping,
+    "sac": schema.mapping,
+    "validation": schema.VALIDATION,
+    "checkpoint_every": schema.integer(0),
+    "seed": schema.integer(0),
+    "threads": schema.integer(1),
+    "engine": schema.choice(ENGINES),
+    "rllib": schema.RLLIB,
+}
 
 
 def load(scenario: str | None = None, path: str | Path | None = None) -> dict[str, Any]:
@@ -40,8 +57,14 @@ def load(scenario: str | None = None, path: str | Path | None = None) -> dict[st
         if not path.exists():
             known = sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
             raise ValueError(f"no config for scenario {scenario!r}; configs exist for {known}")
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"config file {str(path)!r} does not exist")
     with open(path) as f:
-        cfg = yaml.safe_load(f)
+        try:
+            cfg = yaml.safe_load(f)
+        except yaml.YAMLError as exc:
+            raise ValueError(f"{path}: not a YAML file ({exc})") from None
     if not isinstance(cfg, dict):
         raise ValueError(f"{path}: a config is a mapping, got {type(cfg).__name__}")
     return cfg
@@ -62,31 +85,31 @@ def set_value(cfg: dict[str, Any], assignment: str) -> None:
 
 
 def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
-    """A checked copy of ``cfg`` with the non-None ``overrides`` (top-level keys) applied."""
+    """A checked copy of ``cfg`` with the non-None ``overrides`` (top-level keys) applied:
+    every key and value against :data:`TOP` (:mod:`training.schema`), then the env built once,
+    before anything runs."""
     out = copy.deepcopy(cfg)
     out.update({k: v for k, v in overrides.items() if v is not None})
     out.setdefault("seed", 0)
     out.setdefault("threads", 1)
     out.setdefault("env", {})
     out.setdefault("engine", "sb3")
-    unknown = sorted(set(out) - TOP_KEYS)
+    unknown = sorted(set(out) - set(TOP))
     if unknown:
-        raise ValueError(f"unknown config key(s) {unknown}; known: {sorted(TOP_KEYS)}")
-    choices = (("algo", ALGOS), ("action", ACTIONS), ("weighting", WEIGHTINGS), ("engine", ENGINES))
-    for key, allowed in choices:
-        if out.get(key) not in allowed:
-            raise ValueError(f"config {key} = {out.get(key)!r}; use one of {allowed}")
-    for key in ("num_envs", "timesteps", "seed", "threads"):
-        value = out.get(key)
-        least = 0 if key == "seed" else 1
-        if isinstance(value, bool) or not isinstance(value, int) or value < least:
-            raise ValueError(f"config {key} = {value!r} must be an integer >= {least}")
+        raise ValueError(f"unknown config key(s) {unknown}; known: {sorted(TOP)}")
+    for key in ("scenario", "algo", "action", "weighting", "num_envs", "timesteps"):
+        if key not in out:
+            raise ValueError(f"config has no {key!r}")
+    schema.section(TOP)(out, "")
     section = "rllib" if out["engine"] == "rllib" else out["algo"]
     if out["engine"] == "rllib" and out["algo"] != "ppo":
         raise ValueError(f"config algo = {out['algo']!r}: the rllib engine trains ppo")
     if not isinstance(out.get(section), dict):
         raise ValueError(f"config has no {section!r} section of hyperparameters")
     if out["engine"] == "sb3":
+        for algo in ALGOS:
+            if algo in out:
+                schema.sb3_section(algo)(out[algo], algo)
         hyperparameters(out)
     # build one env now: every scenario, filter and observation field is checked by the env
     env = make_env(out, num_envs=1)
@@ -101,8 +124,7 @@ def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
     val.setdefault("episodes", 20)
     val.setdefault("seed", 900_000)
     # the time cap of validation and evaluation episodes (None: the training episodes' own)
-    if val.setdefault("max_steps", None) is not None:
-        check_count(val["max_steps"], "validation.max_steps", 1)
+    val.setdefault("max_steps", None)
     out.setdefault("checkpoint_every", 0)
     return out
 

@@ -17,6 +17,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from rsvo_env.cli.arguments import count, output_problem
+from rsvo_env.cli.main import Parser
 from training import config as configs
 from training.evaluation import (
     evaluation_cap,
@@ -70,7 +72,22 @@ def evaluate(
     weighting: str | None = None,
 ) -> dict[str, Any]:
     """The evaluation as a dict (what ``evaluation.json`` holds)."""
-    policy, cfg = load_model(model_path)
+    return evaluate_loaded(
+        *load_model(model_path), model_path, episodes, seed, compare_scripted, gif, weighting
+    )
+
+
+def evaluate_loaded(
+    policy: Any,
+    cfg: dict[str, Any],
+    model_path: str | Path,
+    episodes: int,
+    seed: int,
+    compare_scripted: bool = False,
+    gif: str | None = None,
+    weighting: str | None = None,
+) -> dict[str, Any]:
+    """:func:`evaluate` of a policy and config already loaded (:func:`load_model`)."""
     configs.limit_threads(cfg["threads"])
     learned = run_episodes(cfg, policy, episodes, seed, weighting=weighting)
     result: dict[str, Any] = {
@@ -91,27 +108,32 @@ def evaluate(
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(
+    p = Parser(
         prog="python -m training.evaluate",
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("model", help="a model.zip (SB3) or checkpoint directory (RLlib) of a run")
-    p.add_argument("--episodes", type=int, default=100)
-    p.add_argument("--seed", type=int, default=1000, help="episode k is seeded seed + k")
+    p.add_argument("--episodes", type=count(1), default=100)
+    p.add_argument("--seed", type=count(0), default=1000, help="episode k is seeded seed + k")
     p.add_argument("--compare-scripted", action="store_true")
     p.add_argument("--weighting", choices=configs.WEIGHTINGS, help="default: the config's")
     p.add_argument("--gif", help="write the first episode as a GIF here")
     p.add_argument("--out", help="the JSON report (default: evaluation.json beside the model)")
     args = p.parse_args(argv)
-    if args.episodes < 1:
-        p.exit(2, f"{p.prog}: error: --episodes = {args.episodes} must be >= 1\n")
+    out = Path(args.out) if args.out else Path(args.model).parent / "evaluation.json"
+    # the user's mistakes, found before any episode runs; what fails after is a bug
+    problem = output_problem(out, ".json") or (args.gif and output_problem(Path(args.gif), ".gif"))
+    if problem:
+        p.exit(2, f"{p.prog}: error: {problem}\n")
     try:
-        result = evaluate(
-            args.model, args.episodes, args.seed, args.compare_scripted, args.gif, args.weighting
-        )
+        policy, cfg = load_model(args.model)
     except ValueError as err:
         p.exit(2, f"{p.prog}: error: {err}\n")
+    result = evaluate_loaded(
+        policy, cfg, args.model, args.episodes, args.seed, args.compare_scripted, args.gif,
+        args.weighting,
+    )  # fmt: skip
     print(
         f"{args.episodes} episodes, seeds {args.seed}..{args.seed + args.episodes - 1}, "
         f"each capped at {result['max_steps']} steps"
@@ -127,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     if args.gif:
         print(f"GIF: {result['gif']}")
-    out = Path(args.out) if args.out else Path(args.model).parent / "evaluation.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
     with open(out, "w") as f:
         json.dump(result, f, indent=2)
     print(f"report: {out}")

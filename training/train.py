@@ -19,11 +19,13 @@ import time
 from pathlib import Path
 from typing import Any
 
+from rsvo_env.cli.arguments import count, output_problem
+from rsvo_env.cli.main import Parser
 from training import config as configs
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = Parser(
         prog="python -m training.train",
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
@@ -35,7 +37,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--weighting", choices=configs.WEIGHTINGS, help="default: the config's")
     p.add_argument("--timesteps", type=int, help="agent-steps (default: the config's)")
     p.add_argument("--num-envs", type=int, help="envs stepped together (default: the config's)")
-    p.add_argument("--seed", type=int, help="seeds the policy, the sampling and the envs")
+    p.add_argument("--seed", type=count(0), help="seeds the policy, the sampling and the envs")
     p.add_argument("--threads", type=int, help="torch threads (default 1: fastest on few cores)")
     p.add_argument("--time-limit", type=float, help="stop after this many seconds and save")
     p.add_argument(
@@ -137,6 +139,9 @@ def main(argv: list[str] | None = None) -> int:
         p.exit(2, f"{p.prog}: error: {err}\n")
     if args.time_limit is not None and not args.time_limit > 0:
         p.exit(2, f"{p.prog}: error: --time-limit = {args.time_limit} must be > 0\n")
+    problem = output_problem(Path(args.out), directory=True)
+    if problem:
+        p.exit(2, f"{p.prog}: error: --out {problem}\n")
     if cfg["engine"] == "rllib":
         from training.rllib_engine import train_rllib
 

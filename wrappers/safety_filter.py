@@ -18,6 +18,7 @@ from pettingzoo.utils import BaseParallelWrapper
 import rsvo_env
 from rsvo_env.factory import filter_config
 from rsvo_env.safety import SafetyFilter
+from rsvo_env.validation import check_flag
 
 
 class RCBFSafetyFilter(BaseParallelWrapper):
@@ -60,7 +61,7 @@ def filtered_parallel_env(
     """The registry's ParallelEnv: the scenario behind the filter (``safety_filter=False``: the
     bare env)."""
     env = rsvo_env.parallel_env(scenario, **kwargs)
-    if not safety_filter:
+    if not check_flag(safety_filter, "safety_filter"):
         if gamma is not None or solver != "exact" or intervention_penalty:
             raise TypeError("gamma, solver and intervention_penalty need safety_filter=True")
         return env

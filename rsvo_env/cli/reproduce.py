@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from rsvo_env.cli import figures, report
-from rsvo_env.cli.main import Parser
+from rsvo_env.cli.arguments import count
+from rsvo_env.cli.main import Parser, UserError, check_output
 from rsvo_env.cli.studies import Plan, circular, position_swap, ramp_merge, who_benefits
 
 
@@ -96,7 +97,9 @@ def main(argv: list[str] | None = None) -> int:
         default=Path("rsvo-results"),
         help="output folder (default: %(default)s)",
     )
-    ap.add_argument("--seed", type=int, default=0, help="seed of every run (default: %(default)s)")
+    ap.add_argument(
+        "--seed", type=count(0), default=0, help="seed of every run (default: %(default)s)"
+    )
     ap.add_argument(
         "--readme",
         type=Path,
@@ -104,6 +107,9 @@ def main(argv: list[str] | None = None) -> int:
         help="also refresh the results block of this README (default: none)",
     )
     args = ap.parse_args(argv)
+    check_output(args.out, directory=True)
+    if args.readme is not None and not args.readme.is_file():
+        raise UserError(f"--readme {args.readme}: no such file")
     res = reproduce(args.out, quick=args.quick, seed=args.seed, readme=args.readme)
     for path in res["written"]:
         print(f"wrote {path}")

@@ -13,7 +13,8 @@ from typing import Any
 import numpy as np
 
 import rsvo_env
-from rsvo_env.cli.main import Parser, UserError
+from rsvo_env.cli.arguments import count
+from rsvo_env.cli.main import Parser, check_output, user_input
 from rsvo_env.rendering import save_gif
 
 
@@ -36,18 +37,20 @@ def run(
     trajectory (T+1, N, 2), theta and goals."""
     from wrappers import RCBFSafetyFilter  # the cli is the top floor: it may use wrappers
 
-    env = rsvo_env.parallel_env(
-        scenario,
-        render_mode="rgb_array" if gif else None,
-        weighting=weighting,
-        render_size=render_size,
-        keep_history=True,
-        **kwargs,
-    )
-    if safety_filter:
-        env = RCBFSafetyFilter(env)
-    options = {"theta": theta} if theta is not None else None
-    env.reset(seed=seed, options=options)
+    with user_input():  # what the library refuses here is the caller's value
+        env = rsvo_env.parallel_env(
+            scenario,
+            render_mode="rgb_array" if gif else None,
+            weighting=weighting,
+            render_size=render_size,
+            keep_history=True,
+            record_series=True,
+            **kwargs,
+        )
+        if safety_filter:
+            env = RCBFSafetyFilter(env)
+        options = {"theta": theta} if theta is not None else None
+        env.reset(seed=seed, options=options)
     base = env.unwrapped
     frames = [env.render()] if gif else []
     while env.agents:
@@ -87,14 +90,13 @@ def main(argv: list[str] | None = None) -> int:
         help="asymmetric: the paper's R-SVO weights; symmetric: 0.5 for every pair",
     )
     ap.add_argument("--theta", type=float, nargs="+", help="personality scores >= 0, one per agent")
-    ap.add_argument("--seed", type=int, default=0, help="seed of the episode")
+    ap.add_argument("--seed", type=count(0), default=0, help="seed of the episode")
     ap.add_argument("--gif", type=Path, help="write an animated GIF here (.gif)")
     ap.add_argument("--png", type=Path, help="write a trajectory figure here (.png)")
     args = ap.parse_args(argv)
-    # formats are checked before any work
-    for path, suffix in ((args.gif, ".gif"), (args.png, ".png")):
-        if path is not None and path.suffix.lower() != suffix:
-            raise UserError(f"{path} must end in {suffix}")
+    # formats and folders are checked before any work
+    check_output(args.gif, ".gif")
+    check_output(args.png, ".png")
     out = run(
         args.scenario,
         safety_filter=not args.no_filter,

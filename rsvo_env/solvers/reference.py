@@ -148,6 +148,42 @@ def solve_one(
     opts = {**SOLVER_OPTIONS.get(solver, {}), **options}
     A = np.asarray(A, dtype=np.float64).reshape(-1, 2)
     b = np.asarray(b, dtype=np.float64).reshape(-1)
+    # The backends' tolerances are absolute: hand them the problem in units of the box, with
+    # unit row normals, whatever the user's units and the rows' scale (1e-150 to 1e150).
+    unit = box_scale(lo, hi)
+    x, feasible, t = _solve_unit(
+        np.asarray(nominal, dtype=np.float64) / unit, *unit_rows(A, b, unit), lo / unit,
+        hi / unit, solver, opts,
+    )  # fmt: skip
+    return x * unit, feasible, t * unit
+
+
+def box_scale(lo: NDArray, hi: NDArray) -> float:
+    """The box's largest bound: the problem's unit of length."""
+    return float(max(np.max(np.abs(lo)), np.max(np.abs(hi))))
+
+
+def unit_rows(A: NDArray, b: NDArray, unit: float) -> tuple[NDArray, NDArray]:
+    """The rows ``A u <= b`` with unit normals and in units of ``unit`` (zero rows kept as they
+    are); each row is divided by its largest entry first, so its norm cannot overflow."""
+    big = np.max(np.abs(A), axis=1) if len(b) else np.zeros(0)
+    safe = np.where(big > 0, big, 1.0)
+    A1, b1 = A / safe[:, None], b / safe
+    norms = np.linalg.norm(A1, axis=1)
+    norms = np.where(big > 0, norms, 1.0)
+    return A1 / norms[:, None], b1 / norms / unit
+
+
+def _solve_unit(
+    nominal: NDArray,
+    A: NDArray,
+    b: NDArray,
+    lo: NDArray,
+    hi: NDArray,
+    solver: str,
+    opts: dict[str, Any],
+) -> tuple[NDArray[np.float64], bool, float]:
+    """:func:`solve_one` of a problem already in units of its box, with unit rows."""
     x = _qp(nominal, A, b, lo, hi, solver, opts)
     if x is not None:
         return x, True, 0.0
@@ -178,7 +214,8 @@ def solve_one(
     if x is None:
         raise RuntimeError(
             f"reference solver {solver!r} (and clarabel) found no projection for nominal "
-            f"{np.asarray(nominal).tolist()} with {len(b)} rows; the least violation is {t:.3g}"
+            f"{np.asarray(nominal).tolist()} (in units of the box) with {len(b)} rows; the "
+            f"least violation is {t:.3g}"
         )
     return x, bool(feasible), 0.0 if feasible else t
 

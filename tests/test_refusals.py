@@ -1,0 +1,116 @@
+"""Bad input is refused by name, and the state is left as it was: seeds, reset options, flags,
+residual parameters whatever the action mode, the filter's box bounds."""
+
+import numpy as np
+import pytest
+
+import rsvo_env
+import wrappers
+from rsvo_env.residual import Residual
+from rsvo_env.safety import FilterConfig
+from rsvo_env.vector import BatchedEnv
+
+BAD_SEEDS = [1.5, "3", np.float64(2.0), 2.0, -1, True, np.bool_(False), 1j]
+
+
+@pytest.mark.parametrize("seed", BAD_SEEDS)
+def test_batched_and_single_envs_refuse_the_same_seeds(seed):
+    venv = BatchedEnv("crowd", num_envs=2, num_agents=3)
+    venv.reset(seed=0)
+    before = venv.sim.state.positions.copy()
+    with pytest.raises(ValueError, match="seed"):
+        venv.reset(seed=seed)
+    np.testing.assert_array_equal(venv.sim.state.positions, before)
+    env = rsvo_env.parallel_env("crowd", num_agents=3)
+    with pytest.raises(ValueError, match="seed"):
+        env.reset(seed=seed)
+
+
+def test_numpy_integer_seeds_are_seeds():
+    a, b = BatchedEnv("crowd", num_envs=2, num_agents=3), BatchedEnv("crowd", num_envs=2)
+    np.testing.assert_array_equal(a.reset(seed=np.int64(5))[0], a.reset(seed=5)[0])
+    assert b.reset(seed=np.uint8(3))[0].shape[0] == 2
+
+
+@pytest.mark.parametrize(
+    "theta",
+    [
+        [[1.0], [2.0], [3.0]],  # (E, 1): once read as one row [1, 2, 3] for every env
+        [[1, 2, 3, 4, 5, 6]] * 3,  # (E, 2N)
+        [[1.0, 2.0, 3.0]],  # (1, N) for 3 envs
+        [[[1.0, 2.0, 3.0]]] * 3,  # 3-D
+        [1.0, 2.0],  # too few
+    ],
+)
+def test_theta_options_of_the_wrong_shape_are_refused_by_name(theta):
+    venv = BatchedEnv("crowd", num_envs=3, num_agents=3)
+    venv.reset(seed=0)
+    before = venv.sim.state.theta.copy()
+    with pytest.raises(ValueError, match="theta"):
+        venv.reset(seed=1, options={"theta": theta})
+    np.testing.assert_array_equal(venv.sim.state.theta, before)
+
+
+def test_a_bad_theta_row_names_its_env_and_agent():
+    venv = BatchedEnv("crowd", num_envs=3, num_agents=3)
+    with pytest.raises(ValueError, match=r"theta\[2\] = -3.0.*agent 2.*env 1"):
+        venv.reset(seed=0, options={"theta": [[1, 2, 3], [1, 2, -3], [1, 1, 1]]})
+    with pytest.raises(ValueError, match="theta"):
+        venv.reset(seed=0, options={"theta": [["1", "2", "3"]] * 3})
+    obs, _ = venv.reset(seed=0, options={"theta": [[1, 2, 3], [4, 5, 6], [7, 8, 9]]})
+    np.testing.assert_array_equal(venv.sim.state.theta, [[1, 2, 3], [4, 5, 6], [7, 8, 9]])
+
+
+BAD_FLAGS = ["False", "no", 0, 1, None, 1.0, "True"]
+
+
+@pytest.mark.parametrize("value", BAD_FLAGS)
+def test_flags_are_true_or_false(value):
+    with pytest.raises(ValueError, match="right_hand"):
+        Residual(0.5, right_hand=value)
+    with pytest.raises(ValueError, match="safety_filter"):
+        BatchedEnv("crowd", num_agents=3, safety_filter=value)
+    with pytest.raises(ValueError, match="right_hand"):
+        BatchedEnv("crowd", num_agents=3, action="residual", residual_right_hand=value)
+    with pytest.raises(ValueError, match="safety_filter"):
+        wrappers.filtered_parallel_env("crowd", safety_filter=value)
+    with pytest.raises(ValueError, match="record_series"):
+        rsvo_env.parallel_env("crowd", record_series=value)
+
+
+@pytest.mark.parametrize(
+    "kwargs,name",
+    [
+        ({"gate_radius": "abc"}, "gate_radius"),
+        ({"residual_scale": -5}, "scale"),
+        ({"interaction_radius": float("nan")}, "interaction_radius"),
+        ({"yield_radius": 0.0}, "yield_radius"),
+        ({"residual_right_hand": "nope"}, "right_hand"),
+    ],
+)
+def test_residual_parameters_are_checked_without_residual_actions(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        BatchedEnv("crowd", num_agents=3, action="direct", **kwargs)
+
+
+@pytest.mark.parametrize(
+    "kwargs,name",
+    [
+        ({"u_max": "3"}, "u_max"),
+        ({"u_max": True}, "u_max"),
+        ({"u_max": ("1", "2")}, "u_max"),
+        ({"u_min": "-1"}, "u_min"),
+        ({"u_max": 3 + 0j}, "u_max"),
+        ({"u_max": [1.0, 2.0, 3.0]}, "u_max"),
+        ({"u_max": float("nan")}, "u_max"),
+        ({"u_min": (1.0, 1.0), "u_max": 2.0}, "u_min"),
+    ],
+)
+def test_filter_box_bounds_are_real_numbers(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        FilterConfig(**kwargs)
+
+
+def test_filter_box_bounds_per_component_are_kept():
+    cfg = FilterConfig(u_max=(1.0, 2.0), u_min=np.array([-3.0, -0.5]))
+    assert cfg.hi.tolist() == [1.0, 2.0] and cfg.lo.tolist() == [-3.0, -0.5]

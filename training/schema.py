@@ -1,0 +1,188 @@
+"""The schema of a training config: every key and value checked before anything runs.
+
+A check takes ``(value, where)`` and returns the value or raises ``ValueError`` naming the key
+(``validation.episodes``) and the value. Sections are mappings whose unknown keys are refused
+(a typo such as ``validation.episdoes`` is an error, not a silent default). The SB3 sections
+are checked against the algorithm's own signature (``ppo.n_epoch`` is refused, ``ppo.n_epochs``
+must be an integer), the env section by building the env, which refuses unknown keywords.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+
+Check = Callable[[Any, str], Any]
+
+
+def _fail(where: str, value: Any, what: str) -> ValueError:
+    return ValueError(f"config {where} = {value!r} must be {what}")
+
+
+def integer(least: int) -> Check:
+    def check(value: Any, where: str) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or value < least:
+            raise _fail(where, value, f"an integer >= {least}")
+        return value
+
+    return check
+
+
+def real(low: float | None = None, high: float | None = None, positive: bool = False) -> Check:
+    what = "a finite number" + (" > 0" if positive else "")
+    if low is not None:
+        what += f" in [{low}, {high}]"
+
+    def check(value: Any, where: str) -> float:
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+        ok = ok and bool(np.isfinite(value)) and (not positive or value > 0)
+        if ok and low is not None:
+            ok = low <= value <= high
+        if not ok:
+            raise _fail(where, value, what)
+        return value
+
+    return check
+
+
+def flag(value: Any, where: str) -> bool:
+    if not isinstance(value, bool):
+        raise _fail(where, value, "true or false")
+    return value
+
+
+def text(value: Any, where: str) -> str:
+    if not isinstance(value, str):
+        raise _fail(where, value, "a string")
+    return value
+
+
+def choice(options: tuple[str, ...]) -> Check:
+    def check(value: Any, where: str) -> str:
+        if value not in options:
+            raise ValueError(f"config {where} = {value!r}; use one of {options}")
+        return value
+
+    return check
+
+
+def optional(inner: Check) -> Check:
+    return lambda value, where: None if value is None else inner(value, where)
+
+
+def integers(least: int) -> Check:
+    """A non-empty list of integers >= ``least`` (layer widths)."""
+
+    def check(value: Any, where: str) -> list[int]:
+        if not isinstance(value, list) or not value:
+            raise _fail(where, value, f"a list of integers >= {least}")
+        for k, v in enumerate(value):
+            integer(least)(v, f"{where}[{k}]")
+        return value
+
+    return check
+
+
+def section(fields: Mapping[str, Check]) -> Check:
+    """A mapping with only these keys, each checked."""
+
+    def check(value: Any, where: str) -> dict[str, Any]:
+        mapping(value, where)
+        unknown = sorted(set(value) - set(fields))
+        if unknown:
+            raise ValueError(f"config {where}: unknown key(s) {unknown}; known: {sorted(fields)}")
+        for key, sub in fields.items():
+            if key in value:
+                sub(value[key], f"{where}.{key}" if where else key)
+        return value
+
+    return check
+
+
+def mapping(value: Any, where: str) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise ValueError(f"config {where} = {value!r} must be a mapping (a section of keys)")
+    return value
+
+
+VALIDATION = section(
+    {
+        "every": integer(0),
+        "episodes": integer(1),
+        "seed": integer(0),
+        "max_steps": optional(integer(1)),
+    }
+)
+
+RLLIB = section(
+    {
+        "lr": real(positive=True),
+        "gamma": real(0.0, 1.0),
+        "lambda": real(0.0, 1.0),
+        "clip_param": real(positive=True),
+        "train_batch_size": integer(1),
+        "minibatch_size": integer(1),
+        "num_epochs": integer(1),
+        "hiddens": integers(1),
+    }
+)
+
+# what the trainer sets itself, never the config
+_SET_BY_TRAINER = {"self", "policy", "env", "seed", "verbose", "device", "_init_setup_model"}
+
+
+def _by_default(default: Any) -> Check | None:
+    """The check a parameter's default value implies (None: any value is the SB3's to judge)."""
+    if isinstance(default, bool):
+        return flag
+    if isinstance(default, int):
+        return integer(0)
+    if isinstance(default, float):
+        return real()
+    if isinstance(default, str):
+        return text
+    return None
+
+
+def _signature_fields(cls: type, skip: set[str]) -> dict[str, Check]:
+    fields: dict[str, Check] = {}
+    for name, param in inspect.signature(cls.__init__).parameters.items():
+        if name in skip or param.kind in (param.VAR_POSITIONAL, param.VAR_KEYWORD):
+            continue
+        fields[name] = _by_default(param.default) or (lambda value, where: value)
+    return fields
+
+
+def sb3_section(algo: str) -> Check:
+    """The section of SB3 algorithm ``algo`` (``ppo``, ``sac``): its constructor's keywords,
+    typed by their defaults, and ``policy_kwargs`` checked against its MlpPolicy's."""
+    from stable_baselines3 import PPO, SAC
+
+    cls = {"ppo": PPO, "sac": SAC}[algo]
+    fields = _signature_fields(cls, _SET_BY_TRAINER)
+    policy = cls.policy_aliases["MlpPolicy"]
+    policy_fields = _signature_fields(
+        policy, {"self", "observation_space", "action_space", "lr_schedule"}
+    )
+    fields["policy_kwargs"] = optional(section(policy_fields))
+    if "train_freq" in fields:  # an int or [n, "step" | "episode"]
+        fields["train_freq"] = lambda value, where: value
+    if "gradient_steps" in fields:  # -1: as many as env steps
+        fields["gradient_steps"] = integer(-1)
+    # numbers SB3 would take as a schedule or a float alike
+    for name in ("learning_rate", "clip_range", "clip_range_vf", "ent_coef", "target_kl"):
+        if name in fields:
+            fields[name] = optional(_number_or_text(name))
+    return section(fields)
+
+
+def _number_or_text(name: str) -> Check:
+    def check(value: Any, where: str) -> Any:
+        if isinstance(value, str):  # e.g. SAC's ent_coef "auto" / "auto_0.1"
+            return value
+        return real()(value, where)
+
+    return check
