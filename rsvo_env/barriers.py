@@ -1,8 +1,8 @@
 """Pairwise barrier rows of the responsibility-weighted QP, vectorised over all pairs.
 
 Every unordered pair (i, j) gives one row to each of its agents, ``A_i u_i <= b_i`` and
-``A_j u_j <= b_j``, whose sum is the centralized CBF condition of the pair. Rows are returned
-padded to a fixed width K with a mask, agents along axis 0. A batch of E envs is one flat set of
+``A_j u_j <= b_j``, whose sum is the centralized CBF condition of the pair. Rows are stored by
+agent (:class:`rsvo_env.rows.Rows`). A batch of E envs is one flat set of
 E * N agents: agent ``e * N + i`` is agent i of env e, and pairs never cross envs.
 
 * Single integrator (paper, eq. ``qp``): ``A_i = -2 (x_i - x_j)``, ``b_i = omega_ij gamma h_ij``,
@@ -14,49 +14,52 @@ E * N agents: agent ``e * N + i`` is agent i of env e, and pairs never cross env
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from rsvo_env.rows import Rows, finish, support
 from rsvo_env.sampled import sampled_braking_rhs
+
+__all__ = ["Rows", "support"]
 
 BARRIERS = ("braking", "hocbf")
 SPLITS = ("capability", "sign_aware", "paper")
 
 
-@dataclass(frozen=True)
-class Rows:
-    """Padded constraint rows: agent i's rows are ``A[i, k] . u <= b[i, k]`` where ``mask[i, k]``.
-
-    ``neighbor[i, k]`` is the other agent of the row (-1 on padding), ``h[i, k]`` the pair's
-    barrier value; ``pair_h`` holds the barrier value of every pair examined, culled or not, in
-    pair order. Double-integrator diagnostics: ``unrecoverable`` and ``capped`` per row.
+def support_within(
+    d: NDArray, lo: NDArray, hi: NDArray, g: NDArray, s: NDArray
+) -> NDArray[np.float64]:
+    """``max d . a`` over the box ``lo <= a <= hi`` cut by the half-plane ``g . a <= s``
+    (rows (k, 2)), taken at the polygon's vertices: the box corners inside the half-plane and
+    the half-plane's line crossing the box edges. The caller ensures the polygon is not empty.
     """
-
-    A: NDArray[np.float64]
-    b: NDArray[np.float64]
-    mask: NDArray[np.bool_]
-    neighbor: NDArray[np.int64]
-    h: NDArray[np.float64]
-    pair_h: NDArray[np.float64]
-    unrecoverable: NDArray[np.bool_]
-    capped: NDArray[np.bool_]
-    n_pairs: int
-    n_culled: int
+    corners = np.array([[lo[0], lo[1]], [lo[0], hi[1]], [hi[0], lo[1]], [hi[0], hi[1]]])
+    cand = [np.broadcast_to(c, d.shape) for c in corners]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for axis in (0, 1):
+            other = 1 - axis
+            for edge in (lo[axis], hi[axis]):
+                t = (s - g[:, axis] * edge) / g[:, other]
+                point = np.empty_like(d)
+                point[:, axis], point[:, other] = edge, t
+                cand.append(point)
+    best = np.full(len(d), -np.inf)
+    # the edge points are on the line to rounding: a relative hair of slack keeps them
+    tol = 1e-12 * (np.abs(g).sum(axis=1) * float(np.max(np.abs([lo, hi]))) + np.abs(s))
+    for c in cand:
+        inside = (np.einsum("kd,kd->k", g, c) <= s + tol) & (c >= lo).all(axis=1)
+        inside &= (c <= hi).all(axis=1) & np.isfinite(c).all(axis=1)
+        best = np.where(inside, np.maximum(best, np.einsum("kd,kd->k", d, c)), best)
+    return best
 
 
 def box_support(A: NDArray, lo: NDArray, hi: NDArray) -> NDArray:
     """``max_{lo <= u <= hi} A . u`` for rows A (..., 2): the largest value a row can take."""
     m = np.maximum(A * lo, A * hi)
     return m[..., 0] + m[..., 1]  # rows are 2-D: a sum over the last axis costs more
-
-
-@njit(cache=True, inline="always")
-def support(ax, ay, lo0, lo1, hi0, hi1):
-    """``max_{lo <= u <= hi} (ax, ay) . u``: the largest value a row takes over the box."""
-    return max(ax * lo0, ax * hi0) + max(ay * lo1, ay * hi1)
 
 
 @njit(cache=True, inline="always")
@@ -67,114 +70,6 @@ def single_integrator_row(xi0, xi1, xj0, xj1, w, gamma, R2):
     dy = xi1 - xj1
     h = (dx * dx + dy * dy) - R2
     return -2.0 * dx, -2.0 * dy, w * gamma * h, h
-
-
-@njit(cache=True)
-def _pack(n, I, J, A_i, b_i, b_j, h, exists, unrec, capped, lo, hi, cull):
-    """Directed rows of both agents of each pair, culled and packed in two O(P) passes.
-
-    Pair p gives agent I[p] the row (A_i[p], b_i[p]) and agent J[p] the row (-A_i[p], b_j[p]),
-    in pair order, so the result does not depend on anything but the inputs.
-    """
-    P = I.shape[0]
-    keep = np.zeros((P, 2), dtype=np.bool_)
-    counts = np.zeros(n, dtype=np.int64)
-    for p in range(P):
-        if not exists[p]:
-            continue
-        ax = A_i[p, 0]
-        ay = A_i[p, 1]
-        # box support of +A_i (agent I) and of -A_i (agent J)
-        sup_i = support(ax, ay, lo[0], lo[1], hi[0], hi[1])
-        sup_j = support(-ax, -ay, lo[0], lo[1], hi[0], hi[1])
-        if not cull or b_i[p] < sup_i:
-            keep[p, 0] = True
-            counts[I[p]] += 1
-        if not cull or b_j[p] < sup_j:
-            keep[p, 1] = True
-            counts[J[p]] += 1
-    width = 1
-    for i in range(n):
-        width = max(width, counts[i])
-    A = np.zeros((n, width, 2))
-    b = np.zeros((n, width))
-    hh = np.zeros((n, width))
-    mask = np.zeros((n, width), dtype=np.bool_)
-    nb = np.full((n, width), -1, dtype=np.int64)
-    un = np.zeros((n, width), dtype=np.bool_)
-    cp = np.zeros((n, width), dtype=np.bool_)
-    fill = np.zeros(n, dtype=np.int64)
-    kept = 0
-    for p in range(P):
-        for side in range(2):
-            if not keep[p, side]:
-                continue
-            kept += 1
-            if side == 0:
-                o, other, sign, rhs = I[p], J[p], 1.0, b_i[p]
-            else:
-                o, other, sign, rhs = J[p], I[p], -1.0, b_j[p]
-            k = fill[o]
-            fill[o] += 1
-            A[o, k, 0] = sign * A_i[p, 0]
-            A[o, k, 1] = sign * A_i[p, 1]
-            b[o, k] = rhs
-            hh[o, k] = h[p]
-            mask[o, k] = True
-            nb[o, k] = other
-            un[o, k] = unrec[p]
-            cp[o, k] = capped[p]
-    return A, b, mask, nb, hh, un, cp, kept
-
-
-def _finish(
-    n: int,
-    I: NDArray,
-    J: NDArray,
-    A_i: NDArray,
-    b_i: NDArray,
-    b_j: NDArray,
-    h: NDArray,
-    lo: NDArray,
-    hi: NDArray,
-    exists: NDArray,
-    unrecoverable: NDArray,
-    capped: NDArray,
-    cull: bool = True,
-) -> Rows:
-    """Both agents' rows of each pair, exact culling, packing.
-
-    Culling (``docs/math.md``): a row whose right side is at least the largest value its left
-    side takes over the box cannot bind anywhere in the box, so dropping it changes no solution.
-    """
-    A_pad, b_pad, mask, nb, h_pad, unrec_pad, cap_pad, kept = _pack(
-        n,
-        I,
-        J,
-        np.ascontiguousarray(A_i),
-        b_i,
-        b_j,
-        h,
-        exists,
-        unrecoverable,
-        capped,
-        lo,
-        hi,
-        cull,
-    )
-    n_culled = 2 * int(exists.sum()) - int(kept)
-    return Rows(
-        A=A_pad,
-        b=b_pad,
-        mask=mask,
-        neighbor=nb,
-        h=h_pad,
-        pair_h=h,
-        unrecoverable=unrec_pad,
-        capped=cap_pad,
-        n_pairs=len(I),
-        n_culled=n_culled,
-    )
 
 
 @njit(cache=True)
@@ -222,7 +117,19 @@ def single_integrator_rows(
         float(safety_radius) ** 2,
     )
     none = np.zeros(len(I), dtype=bool)
-    return _finish(n, I, J, A_i, b_i, b_j, h, lo, hi, ~none, none, none, cull)
+    return finish(n, I, J, A_i, b_i, b_j, h, lo, hi, ~none, none, none, cull)
+
+
+def _tangential_rows(
+    k: NDArray, dp: NDArray, dv: NDArray, dist: NDArray, q: NDArray, w: NDArray, dt: float
+) -> tuple[NDArray, NDArray, NDArray]:
+    """The tangential rows of pairs ``k``: ``-e_t.(a_i - a_j) <= w_t / dt``, scaled by ``|dp|``
+    like the others, split by the pair's weights (a RHS >= 0 gives every split omega RHS).
+    Returns agent i's row ``A_t`` (k, 2) and both shares."""
+    wt = np.sqrt(np.maximum((dv[k] ** 2).sum(axis=1) - q[k] ** 2, 0.0))
+    e_t = (dv[k] - q[k, None] * dp[k] / dist[k, None]) / wt[:, None]
+    rhs_t = dist[k] * wt / dt
+    return -dist[k, None] * e_t, w[k] * rhs_t, (1.0 - w[k]) * rhs_t
 
 
 def double_integrator_rows(
@@ -305,6 +212,7 @@ def double_integrator_rows(
             if stuck.any():
                 sampled = np.where(stuck, sampled_braking_rhs(*args, reversal=False), sampled)
                 keep_sign = np.nonzero(stuck)[0]
+                tangential = _tangential_rows(keep_sign, dp, dv, dist, q, omega_pairs[:, 0], dt)
             rhs = np.minimum(rhs, sampled)
             exists = np.ones(len(I), dtype=bool)
     else:
@@ -325,6 +233,13 @@ def double_integrator_rows(
         s_i = np.where(finite_rhs >= 0.0, w * finite_rhs, (1.0 - w) * finite_rhs)
         if split == "capability":
             cap_i, cap_j = c * push_i, c * push_j
+            if len(keep_sign):
+                # a pair with the tangential row: each agent's capability is what its box
+                # allows along dp without breaking its share of that row, so the share it is
+                # given never needs a corner the row forbids (docs/double_integrator.md)
+                k, (A_t, s_ti, s_tj) = keep_sign, tangential
+                cap_i[k] = support_within(dp[k], lo, hi, A_t, s_ti)
+                cap_j[k] = support_within(-dp[k], lo, hi, -A_t, s_tj)
             unrecoverable = exists & (finite_rhs < -(cap_i + cap_j))
             clipped = np.clip(s_i, -cap_i, finite_rhs + cap_j)
             capped = exists & ~unrecoverable & (clipped != s_i)
@@ -340,21 +255,16 @@ def double_integrator_rows(
         h = np.where(bad, -safety_radius, h)
         exists = exists | bad
     if len(keep_sign) == 0:
-        return _finish(n, I, J, A_i, s_i, s_j, h, lo, hi, exists, unrecoverable, capped, cull)
-    # the tangential rows: -e_t.(a_i - a_j) <= w_t / dt, scaled by |dp| like the others, split by
-    # the same weights (a RHS >= 0 gives every split omega RHS)
-    k = keep_sign
-    wt = np.sqrt(np.maximum(dv2[k] - q[k] ** 2, 0.0))
-    e_t = (dv[k] - q[k, None] * dp[k] / dist[k, None]) / wt[:, None]
-    rhs_t = dist[k] * wt / dt
+        return finish(n, I, J, A_i, s_i, s_j, h, lo, hi, exists, unrecoverable, capped, cull)
+    k, (A_t, s_ti, s_tj) = keep_sign, tangential
     P = len(I)
-    rows = _finish(
+    rows = finish(
         n,
         np.concatenate([I, I[k]]),
         np.concatenate([J, J[k]]),
-        np.concatenate([A_i, -dist[k, None] * e_t]),
-        np.concatenate([s_i, w[k] * rhs_t]),
-        np.concatenate([s_j, (1.0 - w[k]) * rhs_t]),
+        np.concatenate([A_i, A_t]),
+        np.concatenate([s_i, s_ti]),
+        np.concatenate([s_j, s_tj]),
         np.concatenate([h, h[k]]),
         lo,
         hi,

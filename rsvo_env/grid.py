@@ -187,9 +187,11 @@ def pairs_within_radii(
     r = np.ascontiguousarray(r)
     if group is None:
         group = np.zeros(x.shape[:2], dtype=np.int64)
-    # the mean positive radius against each group (a median costs more than it saves)
-    count = (r > 0).sum(axis=1)
-    cell = np.where(count > 0, np.where(r > 0, r, 0.0).sum(axis=1) / np.maximum(count, 1), 1.0)
+    # the mean positive finite radius against each group (a median costs more than it saves);
+    # an agent with an infinite radius scans every cell whatever their size
+    sized = (r > 0) & np.isfinite(r)
+    count = sized.sum(axis=1)
+    cell = np.where(count > 0, np.where(sized, r, 0.0).sum(axis=1) / np.maximum(count, 1), 1.0)
     I, J = _pairs(x, r, np.ascontiguousarray(group, dtype=np.int64), cell)
     return _sorted(I, J, x.shape[0] * x.shape[1])
 

@@ -21,8 +21,8 @@ from rsvo_env.responsibility import Weighting, pair_omega, weight_matrix
 Floor = tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]
 
 # Groups of scores the large-N pair search keeps apart (theta_floor): at most this many, each
-# spanning at least a factor GROUP_RATIO.
-THETA_GROUPS = 12
+# spanning a factor GROUP_RATIO (or its square, its fourth power, ... when more are occupied).
+THETA_GROUPS = 16
 GROUP_RATIO = 1.25
 
 
@@ -49,10 +49,13 @@ def agent_radii(
     """Per agent, the distance beyond which none of its rows with a positive weight can bind:
     :func:`sensing_radius` of its own smallest positive weight (0 for an agent without one)."""
     u = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
-    wg = np.where(np.isfinite(omega_floor), omega_floor, 0.0) * gamma
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = (u + np.sqrt(u * u + (wg * safety_radius) ** 2)) / wg
-    return np.where(wg > 0, r, 0.0)
+    searched = np.isfinite(omega_floor)
+    wg = np.where(searched & (omega_floor > 0), omega_floor, 1.0) * gamma
+    r = (u + np.sqrt(u * u + (wg * safety_radius) ** 2)) / wg
+    # a floor at or below 0 (a weight within rounding of 0) binds at any distance; the root is
+    # exact only in exact arithmetic, so a pair right at it stays examined
+    r = np.where(omega_floor > 0, r * (1.0 + 1e-9), np.inf)
+    return np.where(searched, r, 0.0)
 
 
 def double_integrator_radii(
@@ -82,7 +85,7 @@ def double_integrator_radii(
     speed = np.linalg.norm(velocities, axis=-1)
     V = (speed + speed.max(axis=-1, keepdims=True))[..., None]
     ok = np.isfinite(omega_floor)
-    w = np.where(ok, omega_floor, 1.0)
+    w = np.where(ok & (omega_floor > 0), omega_floor, 1.0)
     if barrier == "braking":
         A = 2.0 * float(np.min(np.minimum(-lo, hi)))
         r = safety_radius + V * V / (2.0 * A) + V * (U / w + A) / (gamma * A)
@@ -99,8 +102,10 @@ def double_integrator_radii(
         a = w * gamma * g2
         B = 2.0 * w * (gamma + g2) * V + 2.0 * U
         r = (B + np.sqrt(B * B + 4.0 * a * a * safety_radius**2)) / (2.0 * a)
-    # the bounds are tight only in exact arithmetic; a pair right at the radius stays examined
-    return np.where(ok, r * (1.0 + 1e-9), 0.0)
+    # the bounds are tight only in exact arithmetic; a pair right at the radius stays examined;
+    # a floor at or below 0 binds at any distance
+    r = np.where(omega_floor > 0, r * (1.0 + 1e-9), np.inf)
+    return np.where(ok, r, 0.0)
 
 
 def weight_floor(omega: NDArray) -> Floor:
@@ -117,31 +122,51 @@ def weight_floor(omega: NDArray) -> Floor:
     return floor[..., None], np.zeros((E, n), dtype=np.int64), required
 
 
-def theta_floor(theta: NDArray, mode: str) -> Floor | None:
+# What the floors give away to rounding, absolute: every weight the filter uses is
+# ``pair_omega`` of two scores, or 1 minus that, each within WEIGHT_ROUNDING of the exact weight
+# (``docs/math.md``: the share's division, pi times it, the cosine's own error, the final sum,
+# with room to spare), so a floor lowered by twice that, plus the subtraction's rounding, lies
+# below every weight it stands for, at any ratio of scores.
+WEIGHT_ROUNDING = 32.0 * np.finfo(float).eps
+FLOOR_MARGIN = 2.0 * WEIGHT_ROUNDING + np.finfo(float).eps
+
+
+def score_groups(theta: NDArray) -> tuple[NDArray[np.int64], int]:
+    """Geometric bins of the scores (E, N): bin k holds ``GROUP_RATIO**k <= theta <
+    GROUP_RATIO**(k + 1)``, the occupied bins numbered from 0 in order, a theta = 0 agent in the
+    lowest; where more than ``THETA_GROUPS`` bins are occupied, the bins widen (the ratio
+    squared, and again) until at most that many are. Returns (group (E, N), K)."""
+    pos = theta > 0
+    if not pos.any():
+        return np.zeros(theta.shape, dtype=np.int64), 1
+    log = np.log(np.where(pos, theta, 1.0)) / np.log(GROUP_RATIO)
+    width = 1.0
+    while True:
+        raw = np.floor(log / width).astype(np.int64)
+        occupied = np.unique(raw[pos])
+        if len(occupied) <= THETA_GROUPS:
+            break
+        width *= 2.0
+    group = np.searchsorted(occupied, raw)
+    return np.where(pos, group, 0).astype(np.int64), len(occupied)
+
+
+def theta_floor(theta: NDArray, mode: str) -> Floor:
     """:func:`weight_floor` of a named weighting from the scores (E, N) alone, in O(N) time and
-    memory, and finer: the agents fall into up to ``THETA_GROUPS`` groups, geometric bins of
-    the scores, and agent i gets its smallest positive weight against each group (E, N, K).
-    The weight of i against j grows with theta_j, so that is the weight against the group's
-    smallest positive score; a zero weight arises exactly between a theta = 0 agent and a
-    positive one. Floors are lowered by 1e-12 (relative) to cover the rounding of the
-    matrix's ``1 - W.T`` half, which only widens the search. None when the ratio of scores
-    is so large that rounding may zero a weight (then use the matrix)."""
+    memory at any ratio of scores, and finer: the agents fall into up to ``THETA_GROUPS``
+    groups (:func:`score_groups`), and agent i gets its smallest positive weight against each
+    group (E, N, K). The weight of i against j grows with theta_j, so that is the weight against
+    the group's smallest positive score, lowered by ``FLOOR_MARGIN`` (a bound on the rounding of
+    the weights the filter uses, not a guess); a floor the margin takes to 0 or below searches
+    the whole group (an infinite radius). A zero weight arises exactly between a theta = 0 agent
+    and a positive one: those pairs are listed."""
     E, n = theta.shape
     none = np.zeros((0, 2), dtype=np.int64)
     if mode == "symmetric" or n < 2:
-        floor = np.full((E, n, 1), 0.5 if n > 1 else np.inf)
+        floor = np.full((E, n, 1), 0.5 if n > 1 else np.inf)  # exactly 0.5: no rounding
         return floor, np.zeros((E, n), dtype=np.int64), none
+    group, K = score_groups(theta)
     pos = np.where(theta > 0, theta, np.inf)
-    if np.any(np.isfinite(pos).any(axis=1) & (theta.max(axis=1) > 1e6 * pos.min(axis=1))):
-        return None
-    # geometric bins of the positive scores (zeros join the lowest): one bin when they are
-    # within a factor GROUP_RATIO, more as they spread, since a bin's floor is set by its lowest
-    lo_pos = np.where(np.isfinite(pos).any(axis=1), pos.min(axis=1), 1.0)[:, None]
-    spread = float(np.log(np.max(np.where(theta > 0, theta, lo_pos) / lo_pos)))
-    K = int(min(THETA_GROUPS, max(1, np.ceil(spread / np.log(GROUP_RATIO)))))
-    width = max(spread / K, 1e-300)
-    rel = np.log(np.where(theta > 0, theta, lo_pos) / lo_pos)
-    group = np.minimum((rel / width).astype(np.int64), K - 1)
     member = group[..., None] == np.arange(K)  # (E, N, K)
     low_pos = np.where(member, pos[..., None], np.inf).min(axis=1)  # (E, K)
     low = np.where(member, theta[..., None], np.inf).min(axis=1)
@@ -152,7 +177,7 @@ def theta_floor(theta: NDArray, mode: str) -> Floor | None:
         np.where(np.isfinite(low_pos)[:, None, :], vs_pos, np.inf),
         np.where(np.isfinite(low)[:, None, :], pair_omega(ti, low[:, None, :]), np.inf),
     )
-    floor = np.where(np.isfinite(w), w * (1.0 - 1e-12), np.inf)
+    floor = w - FLOOR_MARGIN  # inf stays inf: no member to search
     e, i = np.nonzero(theta == 0)
     if len(e) == 0:
         return floor, group, none
@@ -166,9 +191,7 @@ def floor_of(theta: NDArray, mode: Weighting, matrix: NDArray | None = None) -> 
     """The floor of weighting ``mode`` for scores (E, N): :func:`theta_floor` for a named mode
     where it applies, else :func:`weight_floor` of the weight matrices (``matrix``, or built)."""
     if isinstance(mode, str):
-        floor = theta_floor(theta, mode)
-        if floor is not None:
-            return floor
+        return theta_floor(theta, mode)
     return weight_floor(weight_matrix(theta, mode) if matrix is None else matrix)
 
 

@@ -265,8 +265,9 @@ class SafetyFilter:
             )
         nom = nominal.reshape(E * n, 2)
         actions, feasible, active, violation = solvers.solve(
-            cfg.solver, nom, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi
+            cfg.solver, nom, rows.flat_A, rows.flat_b, rows.offsets, cfg.lo, cfg.hi
         )
+        env_of_row = rows.owner // n
         return FilterResult(
             actions=actions.reshape(E, n, 2),
             feasible=feasible.reshape(E, n),
@@ -274,9 +275,9 @@ class SafetyFilter:
             active=active.reshape(E, n),
             min_h=self._min_h(rows, positions, I, dense, nearest, reach),
             max_violation=violation.reshape(E, n),
-            n_rows=rows.mask.sum(axis=-1).reshape(E, n),
-            n_unrecoverable_pairs=rows.unrecoverable.reshape(E, -1).sum(axis=-1) // 2,
-            n_capped_shares=rows.capped.reshape(E, -1).sum(axis=-1),
+            n_rows=rows.counts.reshape(E, n),
+            n_unrecoverable_pairs=per_env(env_of_row, rows.flat_unrecoverable, E) // 2,
+            n_capped_shares=per_env(env_of_row, rows.flat_capped, E),
             rows=rows,
         )
 
@@ -350,6 +351,11 @@ class SafetyFilter:
             d = (nearest_distance(positions) if nearest is None else nearest).min(axis=-1)
             out = np.minimum(out, d**2 - R2)
         return out
+
+
+def per_env(env: NDArray[np.int64], flags: NDArray[np.bool_], E: int) -> NDArray[np.int64]:
+    """(E,) how many of the rows of each env are flagged."""
+    return np.bincount(env[flags], minlength=E).astype(np.int64)
 
 
 def merge_stats(stats: dict[str, Any] | None, res: FilterResult) -> dict[str, Any]:

@@ -17,12 +17,13 @@ def solve(
     nominal: NDArray,
     A: NDArray,
     b: NDArray,
-    mask: NDArray,
+    offsets: NDArray,
     lo: NDArray,
     hi: NDArray,
     **options: Any,
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64]]:
-    """Dispatch to the exact solver (``"exact"``) or a qpsolvers backend by name."""
+    """Dispatch rows stored by agent (``A[offsets[i]:offsets[i + 1]]``) to the exact solver
+    (``"exact"``) or a qpsolvers backend by name."""
     if solver == "exact":
-        return exact.solve_batch(nominal, A, b, mask, lo, hi)
-    return reference.solve_batch(nominal, A, b, mask, lo, hi, solver=solver, **options)
+        return exact.solve_csr(nominal, A, b, offsets, lo, hi)
+    return reference.solve_csr(nominal, A, b, offsets, lo, hi, solver=solver, **options)

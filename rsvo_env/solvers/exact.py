@@ -216,7 +216,77 @@ def _solve_parallel(nominal, A, b, mask, lo, hi, out, feasible, active, violatio
             violation[i] = vio
 
 
+@njit(cache=True)
+def _solve_csr_one(i, nominal, A, b, offsets, lo, hi, rows, out, feasible, active, violation):
+    nrows = 0
+    for k in range(offsets[i], offsets[i + 1]):
+        _set_row(rows, nrows, A[k, 0], A[k, 1], b[k])
+        nrows += 1
+    nom = nominal[i]
+    ok, act, vio = solve_rows(nom[0], nom[1], rows, nrows, lo[i, 0], lo[i, 1], hi[i, 0], hi[i, 1],
+                              out[i])  # fmt: skip
+    feasible[i] = ok
+    active[i] = act
+    violation[i] = vio
+
+
+@njit(cache=True)
+def _widest(offsets):
+    K = 1
+    for i in range(offsets.shape[0] - 1):
+        K = max(K, offsets[i + 1] - offsets[i])
+    return K
+
+
+@njit(cache=True)
+def _solve_csr_serial(nominal, A, b, offsets, lo, hi, out, feasible, active, violation):
+    rows = np.empty((_widest(offsets), 3))
+    for i in range(nominal.shape[0]):
+        _solve_csr_one(i, nominal, A, b, offsets, lo, hi, rows, out, feasible, active, violation)
+
+
+@njit(cache=True, parallel=True)
+def _solve_csr_parallel(nominal, A, b, offsets, lo, hi, out, feasible, active, violation):
+    n = nominal.shape[0]
+    chunk = 64
+    K = _widest(offsets)
+    for c in prange((n + chunk - 1) // chunk):
+        rows = np.empty((K, 3))
+        for i in range(c * chunk, min(n, (c + 1) * chunk)):
+            _solve_csr_one(
+                i, nominal, A, b, offsets, lo, hi, rows, out, feasible, active, violation
+            )
+
+
 PARALLEL_THRESHOLD = 256
+
+
+def solve_csr(
+    nominal: NDArray[np.float64],
+    A: NDArray[np.float64],
+    b: NDArray[np.float64],
+    offsets: NDArray[np.int64],
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64]]:
+    """:func:`solve_batch` of rows stored by agent (:class:`rsvo_env.rows.Rows`): QP i has the
+    rows ``A[offsets[i]:offsets[i + 1]]`` (R, 2), ``b`` (R,); the scratch space is the widest
+    agent's, once per thread, so memory follows the rows, not n times the widest."""
+    nominal = np.ascontiguousarray(nominal, dtype=np.float64)
+    n = nominal.shape[0]
+    lo = np.ascontiguousarray(np.broadcast_to(lo, (n, 2)), dtype=np.float64)
+    hi = np.ascontiguousarray(np.broadcast_to(hi, (n, 2)), dtype=np.float64)
+    out = np.empty((n, 2))
+    feasible = np.empty(n, dtype=np.bool_)
+    active = np.empty(n, dtype=np.int64)
+    violation = np.empty(n)
+    kernel = _solve_csr_parallel if n >= PARALLEL_THRESHOLD else _solve_csr_serial
+    kernel(
+        nominal, np.ascontiguousarray(A, dtype=np.float64).reshape(-1, 2),
+        np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.int64),
+        lo, hi, out, feasible, active, violation,
+    )  # fmt: skip
+    return out, feasible, active, violation
 
 
 def solve_batch(

@@ -232,6 +232,25 @@ def solve_batch(
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64]]:
     """Same contract as :func:`rsvo_env.solvers.exact.solve_batch`, one qpsolvers call a row."""
     n = nominal.shape[0]
+    m = np.asarray(mask, dtype=bool).reshape(n, -1)
+    offsets = np.concatenate([[0], np.cumsum(m.sum(axis=1))])
+    A = np.asarray(A, dtype=np.float64).reshape(n, -1, 2)[m]
+    b = np.asarray(b, dtype=np.float64).reshape(n, -1)[m]
+    return solve_csr(nominal, A, b, offsets, lo, hi, solver, **options)
+
+
+def solve_csr(
+    nominal: NDArray,
+    A: NDArray,
+    b: NDArray,
+    offsets: NDArray,
+    lo: NDArray,
+    hi: NDArray,
+    solver: str = "clarabel",
+    **options: Any,
+) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64]]:
+    """Same contract as :func:`rsvo_env.solvers.exact.solve_csr`, one qpsolvers call a row."""
+    n = nominal.shape[0]
     lo = np.broadcast_to(lo, (n, 2))
     hi = np.broadcast_to(hi, (n, 2))
     out = np.empty((n, 2))
@@ -239,8 +258,7 @@ def solve_batch(
     active = np.zeros(n, dtype=np.int64)
     violation = np.zeros(n)
     for i in range(n):  # the reference is one QP at a time by design
-        m = np.asarray(mask[i], dtype=bool)
-        Ai, bi = A[i][m], b[i][m]
+        Ai, bi = A[offsets[i] : offsets[i + 1]], b[offsets[i] : offsets[i + 1]]
         out[i], feasible[i], violation[i] = solve_one(
             nominal[i], Ai, bi, lo[i], hi[i], solver, **options
         )

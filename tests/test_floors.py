@@ -1,0 +1,116 @@
+"""The large-N pair search's floors at any ratio of scores: each floor lies below every weight
+it stands for (the rounding bounded, not guessed), the search never needs the (N, N) matrix,
+and its memory and pairs follow the agents, not the most extreme personality."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rsvo_env import pairs
+from rsvo_env.neighbors import DENSE_MAX_AGENTS
+from rsvo_env.responsibility import weight_matrix
+from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.scenarios import Crowd
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(2, 60),
+    st.floats(0.0, 24.0),  # log10 of the ratio of scores, up to 1e24
+    st.floats(0.0, 0.3),  # share of theta = 0 agents
+)
+def test_every_floor_lies_below_the_weights_it_stands_for(seed, n, spread, zeros):
+    rng = np.random.default_rng(seed)
+    theta = 10.0 ** rng.uniform(-spread / 2, spread / 2, (2, n))
+    theta[rng.random((2, n)) < zeros] = 0.0
+    floor, group, required = pairs.theta_floor(theta, "asymmetric")
+    listed = {tuple(p) for p in required.tolist()}
+    for e in range(2):
+        W = weight_matrix(theta[e])  # the weights the filter uses, by the matrix's convention
+        for i in range(n):
+            for j in range(n):
+                if i == j:
+                    continue
+                f = floor[e, i, group[e, j]]
+                if W[i, j] == 0.0:
+                    pair = (e * n + min(i, j), e * n + max(i, j))
+                    assert pair in listed or f <= 0.0, (e, i, j)
+                else:
+                    assert f <= W[i, j], (e, i, j, f, W[i, j], theta[e, i], theta[e, j])
+
+
+def crowd(n, seed):
+    return Crowd(num_agents=n, spacing_factor=1.0)._spread(np.random.default_rng(seed))
+
+
+def all_pairs_actions(flt, x, nominal, theta):
+    from rsvo_env import barriers
+    from rsvo_env.solvers import exact
+
+    cfg = flt.config
+    I, J = pairs.all_pairs(len(x))
+    w = flt.pair_weights(theta, None, I, J)
+    rows = barriers.single_integrator_rows(x, w, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+    return exact.solve_csr(nominal, rows.flat_A, rows.flat_b, rows.offsets, cfg.lo, cfg.hi)[0]
+
+
+@pytest.mark.parametrize("ratio", [995.7, 1e4, 1e6, 1e9, 1e14])
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
+def test_culled_equals_all_pairs_at_extreme_ratios(ratio, scale):
+    """One altruist and one egoist among theta 1..10 (ratio up to 1e14, beyond where the floor
+    once gave up or exceeded the true weight by 2e-11): the culled actions are the all-pairs
+    ones to 1e-12 of the box, in any units."""
+    n = 400
+    rng = np.random.default_rng(int(np.log10(ratio) * 7))
+    x = crowd(n, 3) * scale
+    theta = rng.uniform(1.0, 10.0, n)
+    theta[5], theta[17] = 10.0 * ratio**0.5, 1.0 / ratio**0.5
+    u = 2.0 * scale
+    nominal = rng.uniform(-u, u, (n, 2))
+    flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=scale, u_max=u, dt=0.01))
+    assert n > DENSE_MAX_AGENTS  # the per-agent search, not all pairs
+    res = flt.filter(x, nominal, theta)
+    want = all_pairs_actions(flt, x, nominal, theta)
+    np.testing.assert_allclose(res.actions, want, rtol=0, atol=1e-12 * u)
+
+
+def footprint(theta, x, monkeypatch):
+    """Pairs examined and bytes of the rows and the pair search's floors for one filter call,
+    with every (N, N) builder made to fail."""
+
+    def no_matrix(*args, **kwargs):
+        raise AssertionError("an (N, N) weight matrix was built")
+
+    monkeypatch.setattr(pairs, "weight_matrix", no_matrix)
+    monkeypatch.setattr(pairs, "weight_floor", no_matrix)
+    flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0, dt=0.01))
+    res = flt.filter(x, np.zeros_like(x), theta)
+    rows = res.rows
+    row_bytes = sum(
+        a.nbytes
+        for a in (
+            rows.flat_A, rows.flat_b, rows.offsets, rows.flat_neighbor, rows.flat_h,
+            rows.pair_h, rows.flat_unrecoverable, rows.flat_capped,
+        )
+    )  # fmt: skip
+    floor = pairs.floor_of(theta[None], "asymmetric")
+    floor_bytes = sum(a.nbytes for a in floor)
+    return rows.n_pairs, row_bytes + floor_bytes, res
+
+
+def test_extreme_personalities_cost_their_own_rows_only(monkeypatch):
+    """10,000 agents, theta 1..10; then one at 1e-7 and one at 100 besides: the search examines
+    at most 2x the pairs plus the two agents' own rows (N - 1 each), its memory stays within 2x,
+    and no (N, N) matrix is built."""
+    n = 10_000
+    x = crowd(n, 11)
+    theta = np.random.default_rng(11).uniform(1.0, 10.0, n)
+    base_pairs, base_bytes, _ = footprint(theta, x, monkeypatch)
+    extreme = theta.copy()
+    extreme[0], extreme[1] = 1e-7, 100.0
+    got_pairs, got_bytes, res = footprint(extreme, x, monkeypatch)
+    assert got_pairs <= 2 * base_pairs + 2 * (n - 1), (got_pairs, base_pairs)
+    assert got_bytes <= 2 * base_bytes, (got_bytes, base_bytes)
+    assert res.feasible.all()
