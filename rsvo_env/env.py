@@ -25,7 +25,7 @@ from rsvo_env.responsibility import Weighting, check_weighting
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario
 from rsvo_env.state import World
-from rsvo_env.validation import check_action, check_action_dict, check_flag, check_seed
+from rsvo_env.validation import check_action, check_action_dict, check_count, check_flag, check_seed
 
 
 class EpisodeView:
@@ -95,7 +95,7 @@ class RSVOParallelEnv(ParallelEnv):
         # what print(env) shows, through any PettingZoo wrapper: the scenario, PettingZoo-style
         self.metadata = {**self.metadata, "name": f"rsvo_{self.scenario.name}_v0"}
         self.render_mode = render_mode
-        self.render_size = int(render_size)
+        self.render_size = check_count(render_size, "render_size", 16)
         n = self.scenario.num_agents
         self.possible_agents = [f"agent_{i}" for i in range(n)]
         self.agents: list[str] = []

@@ -63,7 +63,8 @@ def filter_config(
         dt=p["dt"],
         dynamics=scenario.dynamics,
         solver=solver,
-        barrier=barrier or p.get("barrier", "braking"),
-        split=split or p.get("split", "capability"),
+        # a value given is used as given (a falsy one is refused by name, never replaced)
+        barrier=p.get("barrier", "braking") if barrier is None else barrier,
+        split=p.get("split", "capability") if split is None else split,
         neighbor_radius=neighbor_radius,
     )

@@ -50,6 +50,10 @@ class Scenario:
     defaults: ClassVar[dict[str, Any]] = {}
     # a scenario laid out for a fixed number of agents (None: any number >= 2)
     fixed_agents: ClassVar[int | None] = None
+    # parameters that must be > 0 and >= 0 (each subclass adds its own)
+    positive: ClassVar[tuple[str, ...]] = ("dt", "goal_tolerance", "safety_radius", "gamma", "k",
+                                           "theta_max")  # fmt: skip
+    nonnegative: ClassVar[tuple[str, ...]] = ("rh_trigger", "rh_trigger_factor")
 
     def __init__(self, **kwargs: Any) -> None:
         params = {**COMMON_DEFAULTS, **self.defaults}
@@ -79,11 +83,19 @@ class Scenario:
                 params[key] = check_real(params[key], f"{self.name}.{key}")
             elif isinstance(default, tuple):
                 arr = real_array(params[key], f"{self.name}.{key}")
+                if arr.shape != np.shape(default):
+                    raise ValueError(
+                        f"{self.name}.{key} = {params[key]!r} has shape {arr.shape}, expected "
+                        f"{np.shape(default)}"
+                    )
                 if not np.isfinite(arr).all():
                     raise ValueError(f"{self.name}.{key} = {params[key]!r} must be finite")
-        for key in ("dt", "goal_tolerance", "safety_radius", "gamma", "k", "theta_max"):
+        for key in self.positive:
             if key in params:
                 params[key] = check_positive(params[key], f"{self.name}.{key}")
+        for key in self.nonnegative:
+            if key in params and params[key] < 0:
+                raise ValueError(f"{self.name}.{key} = {params[key]!r} must be >= 0")
         params[self.limit_name] = check_positive(
             params[self.limit_name], f"{self.name}.{self.limit_name}"
         )
@@ -97,6 +109,10 @@ class Scenario:
             self.check_theta(params["theta"])
         if params["theta_range"] is not None:
             params["theta_range"] = self._check_theta_range(params["theta_range"])
+        self.check()
+
+    def check(self) -> None:
+        """Checks that relate parameters of a scenario to one another (a subclass's own)."""
 
     def _check_theta_range(self, value: Any) -> tuple[float, float]:
         arr = real_array(value, f"{self.name}.theta_range")

@@ -51,6 +51,7 @@ class CircularSwap(Scenario):
     """N agents on a circle, each to the antipodal point (paper, Sec. V-C, Figs. 5-7)."""
 
     name = "circular_swap"
+    positive = (*Scenario.positive, "circle_radius")
     defaults = {
         "num_agents": 6,
         "circle_radius": 5.0,
@@ -87,6 +88,8 @@ class RampMerge(Scenario):
     name = "ramp_merge"
     dynamics = "double_integrator"
     fixed_agents = 2
+    positive = (*Scenario.positive, "start_distance", "v_des", "k_v", "k_lat")
+    nonnegative = (*Scenario.nonnegative, "v0")
     defaults = {
         "num_agents": 2,
         "merge_point": (0.0, 70.0),
@@ -104,6 +107,14 @@ class RampMerge(Scenario):
         "finish_y": 130.0,
         "max_steps": 1500,
     }
+
+    def check(self) -> None:
+        merge_y, finish = self.params["merge_point"][1], self.params["finish_y"]
+        if not finish > merge_y:
+            raise ValueError(
+                f"ramp_merge.finish_y = {finish!r} must lie beyond the merge point "
+                f"(y = {merge_y!r})"
+            )
 
     def lane_starts(self) -> NDArray[np.float64]:
         m = np.array(self.params["merge_point"], dtype=np.float64)
@@ -194,6 +205,7 @@ class Crowd(Scenario):
     """N agents with seeded random starts and goals in a square: the stress and scaling case."""
 
     name = "crowd"
+    positive = (*Scenario.positive, "spacing_factor", "side_factor")
     defaults = {
         "num_agents": 12,
         "safety_radius": 1.0,

@@ -30,3 +30,12 @@ def test_ci_runs_exactly_the_readme_test_command():
     script = (root / ".ci" / "run").read_text().splitlines()
     steps = [ln.strip() for ln in script if ln.strip() and not ln.startswith(("#", "set ", "cd "))]
     assert command == " && ".join(steps)
+
+
+def test_property_tests_are_derandomized_unless_exploring():
+    """README: the test command draws the same examples every run; the explore profile not."""
+    from hypothesis import settings
+
+    assert "--hypothesis-profile=explore" in README
+    assert settings.default.derandomize and settings.default.database is None
+    assert not settings.get_profile("explore").derandomize

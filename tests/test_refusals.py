@@ -114,3 +114,32 @@ def test_filter_box_bounds_are_real_numbers(kwargs, name):
 def test_filter_box_bounds_per_component_are_kept():
     cfg = FilterConfig(u_max=(1.0, 2.0), u_min=np.array([-3.0, -0.5]))
     assert cfg.hi.tolist() == [1.0, 2.0] and cfg.lo.tolist() == [-3.0, -0.5]
+
+
+@pytest.mark.parametrize(
+    "name,kwargs,field",
+    [
+        ("ramp_merge", {"barrier": 0}, "barrier"),
+        ("ramp_merge", {"split": ""}, "split"),
+        ("ramp_merge", {"merge_point": -1}, "merge_point"),
+        ("ramp_merge", {"merge_point": (0.0, 1.0, 2.0)}, "merge_point"),
+        ("ramp_merge", {"v_des": -1.0}, "v_des"),
+        ("ramp_merge", {"k_v": -1.0}, "k_v"),
+        ("ramp_merge", {"v0": -1.0}, "v0"),
+        ("ramp_merge", {"finish_y": -1.0}, "finish_y"),
+        ("crowd", {"rh_trigger_factor": -1.0}, "rh_trigger_factor"),
+        ("circular_swap", {"rh_trigger": -1.0}, "rh_trigger"),
+        ("circular_swap", {"circle_radius": 0.0}, "circle_radius"),
+        ("crowd", {"side_factor": -2.0}, "side_factor"),
+        ("position_swap", {"start": ((0.0, 0.0),)}, "start"),
+    ],
+)
+def test_scenario_parameters_out_of_range_are_refused_by_name(name, kwargs, field):
+    with pytest.raises(ValueError, match=field):
+        BatchedEnv(name, **kwargs)
+
+
+@pytest.mark.parametrize("size", ["600", True, 2.5, 0])
+def test_render_size_is_an_integer(size):
+    with pytest.raises(ValueError, match="render_size"):
+        rsvo_env.parallel_env("crowd", render_size=size)
