@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_culling import all_pairs_actions, crowd
 
 from rsvo_env import pairs
 from rsvo_env.neighbors import DENSE_MAX_AGENTS
 from rsvo_env.responsibility import weight_matrix
 from rsvo_env.safety import FilterConfig, SafetyFilter
-from rsvo_env.scenarios import Crowd
 
 
 @settings(max_examples=200, deadline=None)
@@ -39,21 +39,6 @@ def test_every_floor_lies_below_the_weights_it_stands_for(seed, n, spread, zeros
                     assert pair in listed or f <= 0.0, (e, i, j)
                 else:
                     assert f <= W[i, j], (e, i, j, f, W[i, j], theta[e, i], theta[e, j])
-
-
-def crowd(n, seed):
-    return Crowd(num_agents=n, spacing_factor=1.0)._spread(np.random.default_rng(seed))
-
-
-def all_pairs_actions(flt, x, nominal, theta):
-    from rsvo_env import barriers
-    from rsvo_env.solvers import exact
-
-    cfg = flt.config
-    I, J = pairs.all_pairs(len(x))
-    w = flt.pair_weights(theta, None, I, J)
-    rows = barriers.single_integrator_rows(x, w, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
-    return exact.solve_csr(nominal, rows.flat_A, rows.flat_b, rows.offsets, cfg.lo, cfg.hi)[0]
 
 
 @pytest.mark.parametrize("ratio", [995.7, 1e4, 1e6, 1e9, 1e14])

@@ -272,21 +272,25 @@ def solve_csr(
     """:func:`solve_batch` of rows stored by agent (:class:`rsvo_env.rows.Rows`): QP i has the
     rows ``A[offsets[i]:offsets[i + 1]]`` (R, 2), ``b`` (R,); the scratch space is the widest
     agent's, once per thread, so memory follows the rows, not n times the widest."""
+    nominal, lo, hi, outputs = _batch(nominal, lo, hi)
+    kernel = _solve_csr_parallel if len(nominal) >= PARALLEL_THRESHOLD else _solve_csr_serial
+    kernel(
+        nominal, np.ascontiguousarray(A, dtype=np.float64).reshape(-1, 2),
+        np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.int64),
+        lo, hi, *outputs,
+    )  # fmt: skip
+    return outputs
+
+
+def _batch(nominal: NDArray, lo: NDArray, hi: NDArray) -> tuple[NDArray, NDArray, NDArray, tuple]:
+    """The kernels' inputs as contiguous float arrays, a box per problem, and their outputs
+    (actions, feasible, active, violation), allocated."""
     nominal = np.ascontiguousarray(nominal, dtype=np.float64)
     n = nominal.shape[0]
     lo = np.ascontiguousarray(np.broadcast_to(lo, (n, 2)), dtype=np.float64)
     hi = np.ascontiguousarray(np.broadcast_to(hi, (n, 2)), dtype=np.float64)
-    out = np.empty((n, 2))
-    feasible = np.empty(n, dtype=np.bool_)
-    active = np.empty(n, dtype=np.int64)
-    violation = np.empty(n)
-    kernel = _solve_csr_parallel if n >= PARALLEL_THRESHOLD else _solve_csr_serial
-    kernel(
-        nominal, np.ascontiguousarray(A, dtype=np.float64).reshape(-1, 2),
-        np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.int64),
-        lo, hi, out, feasible, active, violation,
-    )  # fmt: skip
-    return out, feasible, active, violation
+    outputs = (np.empty((n, 2)), np.empty(n, np.bool_), np.empty(n, np.int64), np.empty(n))
+    return nominal, lo, hi, outputs
 
 
 def solve_batch(
@@ -303,21 +307,15 @@ def solve_batch(
     Returns actions (B, 2), feasible (B,), active row count (B,), and the largest normalised
     violation (B,) (0 where feasible).
     """
-    nominal = np.ascontiguousarray(nominal, dtype=np.float64)
+    nominal, lo, hi, outputs = _batch(nominal, lo, hi)
     n = nominal.shape[0]
     A = np.ascontiguousarray(A, dtype=np.float64).reshape(n, -1, 2)
     b = np.ascontiguousarray(b, dtype=np.float64).reshape(n, -1)
     mask = np.ascontiguousarray(mask, dtype=np.bool_).reshape(n, -1)
-    lo = np.ascontiguousarray(np.broadcast_to(lo, (n, 2)), dtype=np.float64)
-    hi = np.ascontiguousarray(np.broadcast_to(hi, (n, 2)), dtype=np.float64)
-    out = np.empty((n, 2))
-    feasible = np.empty(n, dtype=np.bool_)
-    active = np.empty(n, dtype=np.int64)
-    violation = np.empty(n)
     if A.shape[1] == 0:
         A = np.zeros((n, 1, 2))
         b = np.zeros((n, 1))
         mask = np.zeros((n, 1), dtype=np.bool_)
     kernel = _solve_parallel if n >= PARALLEL_THRESHOLD else _solve_serial
-    kernel(nominal, A, b, mask, lo, hi, out, feasible, active, violation)
-    return out, feasible, active, violation
+    kernel(nominal, A, b, mask, lo, hi, *outputs)
+    return outputs
