@@ -131,3 +131,26 @@ def test_every_shipped_config_passes_its_schema():
         cfg = configs.load(path=path)
         resolved = configs.resolve(copy.deepcopy(cfg))
         assert resolved["validation"]["episodes"] >= 1
+
+
+@pytest.mark.parametrize(
+    "extra,words",
+    [
+        (["--seeds", "-1"], ["-1"]),
+        (["--timesteps", "0"], ["0"]),
+        (["--set", "validation=3"], ["validation", "mapping"]),
+        (["--scenario", "nowhere"], ["nowhere"]),
+        (["--out", "{afile}/sweep"], ["afile", "not a directory"]),
+    ],
+)
+def test_sweep_refuses_bad_arguments_before_any_trial(tmp_path, a_file, capsys, extra, words):
+    from training import sweep
+
+    extra = [a.format(afile=a_file) for a in extra]
+    out = [] if "--out" in extra else ["--out", str(tmp_path / "sweep")]
+    with pytest.raises(SystemExit) as exit_:
+        sweep.main([*extra, *out])
+    assert exit_.value.code == 2
+    line = one_error_line(capsys)
+    assert all(w in line for w in words), line
+    assert not (tmp_path / "sweep").exists()

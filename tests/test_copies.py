@@ -96,3 +96,40 @@ def test_copied_metrics_count_in_the_copy():
     batched_roll(twin, 5)
     assert int(twin.sim.metrics.steps[0]) == 8
     assert int(env.sim.metrics.steps[0]) == 3
+
+
+def test_gymnasium_and_sb3_copies_go_on_as_the_original():
+    """The same through ``gymnasium.make`` (its TimeLimit and our truncation) and SB3's VecEnv."""
+    import gymnasium
+
+    env = gymnasium.make("rsvo/Crowd-v0", num_agents=70, max_steps=30, max_episode_steps=30)
+    env.reset(seed=0)
+    for _ in range(10):
+        env.step(env.unwrapped.nominal_action())
+
+    def roll(e):
+        out = []
+        for _ in range(25):
+            obs, reward, term, trunc, _ = e.step(e.unwrapped.nominal_action())
+            out.append(np.r_[obs, reward, term, trunc])
+            if term or trunc:
+                out.append(e.reset()[0])
+        return out
+
+    twins = copies(env)
+    want = roll(env)
+    for twin in twins:
+        for a, b in zip(want, roll(twin), strict=True):
+            np.testing.assert_array_equal(a, b)
+    venv = wrappers.SB3VecEnv(BatchedEnv("crowd", num_envs=2, num_agents=70, max_steps=20))
+    venv.seed(0)
+    venv.reset()
+    act = np.zeros((venv.num_envs, 2), np.float32)
+    for _ in range(5):
+        venv.step(act)
+    twins = copies(venv)
+    want = [venv.step(act) for _ in range(30)]
+    for twin in twins:
+        for a, b in zip(want, [twin.step(act) for _ in range(30)], strict=True):
+            for x, y in zip(a[:3], b[:3], strict=True):
+                np.testing.assert_array_equal(x, y)

@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from rsvo_env.cli.arguments import count, output_problem
+from rsvo_env.cli.main import Parser
 from training import config as configs
 
 THETAS = ("random", "paper", "equal")
@@ -56,7 +58,7 @@ def trial(params: dict[str, Any]) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(
+    p = Parser(
         prog="python -m training.sweep",
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
@@ -65,16 +67,19 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--scenario", default="circular_swap")
     p.add_argument("--weightings", nargs="+", default=list(configs.WEIGHTINGS))
     p.add_argument("--thetas", nargs="+", default=["random", "paper"], choices=THETAS)
-    p.add_argument("--seeds", nargs="+", type=int, default=[0, 1])
-    p.add_argument("--timesteps", type=int, default=200_000, help="agent-steps a trial")
-    p.add_argument("--episodes", type=int, default=100)
-    p.add_argument("--eval-seed", type=int, default=1000)
+    p.add_argument("--seeds", nargs="+", type=count(0), default=[0, 1])
+    p.add_argument("--timesteps", type=count(1), default=200_000, help="agent-steps a trial")
+    p.add_argument("--episodes", type=count(1), default=100)
+    p.add_argument("--eval-seed", type=count(0), default=1000)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     p.add_argument("--address", help="a running Ray cluster (default: a local instance)")
     p.add_argument("--out", required=True)
     args = p.parse_args(argv)
-    base = configs.load(args.scenario)
+    problem = output_problem(Path(args.out), directory=True)
+    if problem:
+        p.exit(2, f"{p.prog}: error: --out {problem}\n")
     try:
+        base = configs.load(args.scenario)
         for assignment in args.set:
             configs.set_value(base, assignment)
         for w in args.weightings:
