@@ -139,6 +139,9 @@ class Simulator:
             raise ValueError(f"intervention_penalty = {intervention_penalty!r} must be >= 0")
         self.filters.insert(0, flt)
         self.penalties.append(c)
+        # what the world reports is what the filter acting last (right before integration) uses
+        last = self.filters[-1].config
+        self.world_params.update(gamma=last.gamma, barrier=last.barrier, split=last.split)
 
     def set_theta(self, e: int, theta: Any) -> None:
         self.state.theta[e] = self.scenario.check_theta(theta)

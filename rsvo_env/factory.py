@@ -19,7 +19,25 @@ SIM_KEYWORDS = (
     "stall_clock",
     "reward_team",
 )
-FILTER_KEYWORDS = ("gamma", "solver", "barrier", "split", "neighbor_radius")
+# The filter's keywords: every adapter takes them out of its keywords by this one table and hands
+# them to the filter (FilterConfig is their owner; the scenario's gamma, barrier and split are the
+# defaults a filter starts from).
+FILTER_KEYWORDS = ("gamma", "solver", "barrier", "split", "neighbor_radius", "intervention_penalty")
+
+
+def route(safety_filter: bool, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """Take the filter's keywords out of ``kwargs`` (in place) and return those given (None is
+    the default); refuse them without a filter, where they would do nothing."""
+    filter_kwargs = {k: kwargs.pop(k) for k in FILTER_KEYWORDS if k in kwargs}
+    filter_kwargs = {k: v for k, v in filter_kwargs.items() if v is not None}
+    effective = [
+        k
+        for k, v in filter_kwargs.items()
+        if not (k == "intervention_penalty" and isinstance(v, (int, float)) and v == 0)
+    ]
+    if not safety_filter and effective:
+        raise TypeError(f"filter parameters {sorted(effective)} need safety_filter=True")
+    return filter_kwargs
 
 
 def make_simulator(

@@ -13,7 +13,7 @@ import gymnasium
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.factory import FILTER_KEYWORDS, filter_config, make_simulator
+from rsvo_env.factory import filter_config, make_simulator, route
 from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting
 from rsvo_env.safety import SafetyFilter
@@ -56,7 +56,6 @@ class BatchedEnv:
         scenario: str | Scenario = "crowd",
         num_envs: int = 1,
         safety_filter: bool = True,
-        intervention_penalty: float = 0.0,
         action: str = "direct",
         gate_radius: float = 0.5,
         residual_right_hand: bool = True,
@@ -68,8 +67,8 @@ class BatchedEnv:
         """``kwargs``: the filter's ``gamma``, ``solver``, ``barrier``, ``split``,
         ``neighbor_radius``; ``num_obs_neighbors``, ``frame``, ``weighting``, ``reward_*``,
         ``max_cycles``; and every scenario parameter."""
-        filter_kwargs = {k: kwargs.pop(k) for k in FILTER_KEYWORDS if k in kwargs}
         safety_filter = check_flag(safety_filter, "safety_filter")
+        filter_kwargs = route(safety_filter, kwargs)
         if action not in ("direct", "residual"):
             raise ValueError(f"action = {action!r}; use 'direct' or 'residual'")
         # checked whatever the action mode: a bad value is refused, not ignored
@@ -79,13 +78,9 @@ class BatchedEnv:
         self.sim = make_simulator(scenario, num_envs=num_envs, **kwargs)
         self.scenario = self.sim.scenario
         if safety_filter:
+            penalty = filter_kwargs.pop("intervention_penalty", 0.0)
             config = filter_config(self.scenario, **filter_kwargs)
-            self.sim.add_filter(SafetyFilter(config), intervention_penalty)
-        elif filter_kwargs or intervention_penalty:
-            raise TypeError(
-                f"filter parameters {sorted(filter_kwargs) or ['intervention_penalty']} need "
-                "safety_filter=True"
-            )
+            self.sim.add_filter(SafetyFilter(config), penalty)
         if action == "residual":
             self.sim.set_residual(residual)
         self.num_envs, self.num_agents = self.sim.num_envs, self.sim.n

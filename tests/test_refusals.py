@@ -143,3 +143,50 @@ def test_scenario_parameters_out_of_range_are_refused_by_name(name, kwargs, fiel
 def test_render_size_is_an_integer(size):
     with pytest.raises(ValueError, match="render_size"):
         rsvo_env.parallel_env("crowd", render_size=size)
+
+
+def test_gamma_and_the_filter_keywords_are_reported_as_used_through_every_adapter():
+    """One owner: gamma=5 (and barrier, split, neighbor_radius) given to any adapter is the
+    value the filter uses and the value the world reports."""
+    import gymnasium
+    import pettingzoo
+
+    from training import config as configs
+
+    def used(sim):
+        (flt,) = sim.filters
+        return flt.config
+
+    sims = {
+        "parallel_env + RCBFSafetyFilter": wrappers.RCBFSafetyFilter(
+            rsvo_env.parallel_env("crowd", gamma=5.0)
+        ).unwrapped.sim,
+        "filtered_parallel_env": wrappers.filtered_parallel_env("crowd", gamma=5.0).unwrapped.sim,
+        "BatchedEnv": BatchedEnv("crowd", gamma=5.0).sim,
+        "gymnasium.make": gymnasium.make(
+            "rsvo/Crowd-v0", gamma=5.0
+        ).unwrapped.parallel.unwrapped.sim,
+        "pettingzoo.make": pettingzoo.make("parallel", "rsvo/Crowd-v0", gamma=5.0).unwrapped.sim,
+        "SB3VecEnv": wrappers.SB3VecEnv(BatchedEnv("crowd", gamma=5.0)).venv.sim,
+        "ResidualAction": wrappers.ResidualAction(
+            wrappers.filtered_parallel_env("crowd", gamma=5.0)
+        ).unwrapped.sim,
+        "training config": configs.make_env(
+            configs.resolve({**configs.load("crowd"), "env": {"num_agents": 4, "gamma": 5.0}}), 1
+        ).sim,
+    }
+    for name, sim in sims.items():
+        assert used(sim).gamma == 5.0 == sim.world_params["gamma"], name
+    # the filter's other keywords take the same way, gymnasium.make included
+    env = gymnasium.make("rsvo/RampMerge-v0", barrier="hocbf", split="sign_aware")
+    sim = env.unwrapped.parallel.unwrapped.sim
+    assert (used(sim).barrier, used(sim).split) == ("hocbf", "sign_aware")
+    assert (sim.world_params["barrier"], sim.world_params["split"]) == ("hocbf", "sign_aware")
+    batched = BatchedEnv("ramp_merge", barrier="hocbf").sim
+    assert used(batched).barrier == batched.world_params["barrier"] == "hocbf"
+    env = gymnasium.make("rsvo/Crowd-v0", neighbor_radius=50.0)  # once an unknown keyword
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    assert used(env.unwrapped.parallel.unwrapped.sim).neighbor_radius == 50.0
+    with pytest.raises(TypeError, match="need safety_filter=True"):
+        wrappers.filtered_parallel_env("crowd", safety_filter=False, neighbor_radius=5.0)

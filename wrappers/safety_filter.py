@@ -16,7 +16,7 @@ from typing import Any
 from pettingzoo.utils import BaseParallelWrapper
 
 import rsvo_env
-from rsvo_env.factory import filter_config
+from rsvo_env.factory import filter_config, route
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.validation import check_flag
 
@@ -51,23 +51,16 @@ class RCBFSafetyFilter(BaseParallelWrapper):
 
 
 def filtered_parallel_env(
-    scenario: str = "circular_swap",
-    safety_filter: bool = True,
-    gamma: float | None = None,
-    solver: str = "exact",
-    intervention_penalty: float = 0.0,
-    **kwargs: Any,
+    scenario: str = "circular_swap", safety_filter: bool = True, **kwargs: Any
 ):
     """The registry's ParallelEnv: the scenario behind the filter (``safety_filter=False``: the
-    bare env)."""
+    bare env). The filter's keywords (``gamma``, ``solver``, ``barrier``, ``split``,
+    ``neighbor_radius``, ``intervention_penalty``) go to the filter, the rest to the env, by
+    the same table as ``BatchedEnv``'s (``rsvo_env.factory.route``)."""
+    safety_filter = check_flag(safety_filter, "safety_filter")
+    filter_kwargs = route(safety_filter, kwargs)
     env = rsvo_env.parallel_env(scenario, **kwargs)
-    if not check_flag(safety_filter, "safety_filter"):
-        if gamma is not None or solver != "exact" or intervention_penalty:
-            raise TypeError("gamma, solver and intervention_penalty need safety_filter=True")
-        return env
-    return RCBFSafetyFilter(
-        env, gamma=gamma, solver=solver, intervention_penalty=intervention_penalty
-    )
+    return RCBFSafetyFilter(env, **filter_kwargs) if safety_filter else env
 
 
 def filtered_aec_env(**kwargs: Any):
