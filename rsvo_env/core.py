@@ -22,7 +22,7 @@ import numpy as np
 from gymnasium.utils import seeding
 from numpy.typing import NDArray
 
-from rsvo_env import dynamics, observation, planar, post_step
+from rsvo_env import observation, planar, post_step
 from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_neighbors
 from rsvo_env.pairs import Floor
@@ -130,7 +130,7 @@ class Simulator:
     def add_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
         """Add a safety-filter stage before the stages already there (an outer wrapper's filter
         acts first, as wrappers would), and its reward penalty ``c |u_safe - u_nominal|^2``."""
-        if flt.config.dynamics != self.scenario.dynamics:
+        if flt.config.model != self.scenario.model:
             raise ValueError(
                 f"filter dynamics {flt.config.dynamics!r} != scenario {self.scenario.dynamics!r}"
             )
@@ -288,7 +288,7 @@ class Simulator:
         if not self.filters:
             return u_nominal, None, np.zeros(u_nominal.shape[:-1])
         u, stats = u_nominal, None
-        vel = s.velocities if self.scenario.dynamics == "double_integrator" else None
+        vel = s.velocities if self.scenario.model.needs_velocities else None
         for flt in self.filters:
             res: FilterResult = flt.apply(
                 s.positions,
@@ -317,13 +317,7 @@ class Simulator:
         u_nominal = self.to_controls(actions)
         u, stats, intervention = self.apply_filters(u_nominal)
         before = s.positions
-        if sc.dynamics == "double_integrator":
-            s.positions, s.velocities = dynamics.double_integrator_step(
-                s.positions, s.velocities, u, self.dt
-            )
-        else:
-            s.positions = dynamics.single_integrator_step(s.positions, u, self.dt)
-            s.velocities = u.copy()
+        s.positions, s.velocities = sc.model.step(s.positions, s.velocities, u, self.dt)
         after = post_step.fused if self.fused_post_step else post_step.by_hooks
         reward, terminated, truncated = after(self, before, u_nominal, u, stats)
         penalty = sum(self.penalties)

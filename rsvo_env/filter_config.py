@@ -10,10 +10,11 @@ import qpsolvers
 from numpy.typing import NDArray
 
 from rsvo_env import barriers
+from rsvo_env import dynamics as models
 from rsvo_env.responsibility import WEIGHTING_MODES, Weighting
 from rsvo_env.validation import real_array
 
-DYNAMICS = ("single_integrator", "double_integrator")
+DYNAMICS = models.NAMES
 
 
 def _box_bound(value: object, name: str) -> NDArray[np.float64]:
@@ -45,13 +46,14 @@ class FilterConfig:
     u_max: float | tuple[float, float] = 3.0
     u_min: float | tuple[float, float] | None = None
     dt: float | None = None
-    dynamics: str = "single_integrator"
+    dynamics: str | models.Dynamics = "single_integrator"
     weighting: Weighting = "asymmetric"
     solver: str = "exact"
     barrier: str = "braking"
     split: str = "capability"
     gamma2: float | None = None
     neighbor_radius: float | None = None
+    model: models.Dynamics = field(init=False, repr=False, compare=False)
     lo: NDArray[np.float64] = field(init=False, repr=False, compare=False)
     hi: NDArray[np.float64] = field(init=False, repr=False, compare=False)
 
@@ -68,6 +70,10 @@ class FilterConfig:
             if not ok:
                 raise ValueError(f"FilterConfig.{name} = {value!r} must be a finite number > 0")
 
+        # the model (a name or an instance); ``dynamics`` keeps its name, as reported
+        model = models.get(self.dynamics, "FilterConfig.dynamics")
+        object.__setattr__(self, "model", model)
+        object.__setattr__(self, "dynamics", model.name)
         positive("gamma", self.gamma)
         positive("safety_radius", self.safety_radius)
         if self.gamma2 is not None:
@@ -89,32 +95,9 @@ class FilterConfig:
                 f"FilterConfig needs finite u_min < u_max per component, got "
                 f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
             )
-        if self.dynamics == "single_integrator" and not ((lo <= 0).all() and (hi >= 0).all()):
-            # u = 0 satisfies every row while h >= 0 only if the box holds 0: without it a pair in
-            # the safe set can have no safe action
-            raise ValueError(
-                f"FilterConfig: the single-integrator box must contain 0 (u_min <= 0 <= u_max), "
-                f"got u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
-            )
-        if self.dynamics == "double_integrator" and self.barrier == "braking":
-            if not ((lo < 0).all() and (hi > 0).all()):
-                raise ValueError(
-                    f"FilterConfig: the braking barrier needs u_min < 0 < u_max, got "
-                    f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
-                )
-            reach = float(np.min(np.minimum(-lo, hi)) + np.hypot(*np.maximum(-lo, hi)))
-            if self.dt is not None and self.dt**2 * reach >= self.safety_radius:
-                # the sampled-data row divides by the gap at the next sample, which h >= 0 keeps
-                # above safety_radius - dt^2 (a_max + |U|) (docs/double_integrator.md)
-                raise ValueError(
-                    f"FilterConfig: dt^2 (a_max + |u_max|) = {self.dt**2 * reach!r} >= "
-                    f"safety_radius = {self.safety_radius!r}: the sampled-data guarantee of the "
-                    "braking barrier needs dt^2 (a_max + |u_max|) < safety_radius"
-                )
+        model.check_box(self, lo, hi)
         object.__setattr__(self, "lo", lo)
         object.__setattr__(self, "hi", hi)
-        if self.dynamics not in DYNAMICS:
-            raise ValueError(f"FilterConfig.dynamics = {self.dynamics!r}; use one of {DYNAMICS}")
         if not callable(self.weighting) and self.weighting not in WEIGHTING_MODES:
             raise ValueError(
                 f"FilterConfig.weighting = {self.weighting!r}; use one of {WEIGHTING_MODES} "

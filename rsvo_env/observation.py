@@ -41,13 +41,8 @@ def limits_for(scenario: Any) -> Limits:
     lo, hi = scenario.arena()
     horizon = p["max_steps"] * p["dt"]
     extent = float(max(np.abs(lo).max(), np.abs(hi).max()))
-    u = scenario.u_max
-    if scenario.dynamics == "double_integrator":
-        v0 = float(p.get("v0", 0.0))
-        pos, vel = extent + v0 * horizon + 0.5 * u * horizon**2, v0 + u * horizon
-    else:
-        pos, vel = extent + u * horizon, u
-    return Limits(pos, vel, p["theta_max"], float(p["safety_radius"]))
+    reach, vel = scenario.model.reach(p, scenario.u_max, horizon)
+    return Limits(extent + reach, vel, p["theta_max"], float(p["safety_radius"]))
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env import barriers, pairs, solvers
-from rsvo_env.filter_config import DYNAMICS, FilterConfig
+from rsvo_env.filter_config import FilterConfig
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_distance
 from rsvo_env.planar import norm
 from rsvo_env.responsibility import (
@@ -88,8 +88,6 @@ class SafetyFilter:
         """Radius of the pair search: the sensing radius (single integrator) or the user's.
         ``omega_min``: each scene's smallest weight, when the caller keeps it."""
         cfg = self.config
-        if cfg.dynamics == "double_integrator":
-            return cfg.neighbor_radius if cfg.neighbor_radius is not None else float("inf")
         if omega_min is not None:
             w_min = float(np.min(omega_min))
         elif omega is not None:
@@ -97,7 +95,9 @@ class SafetyFilter:
         else:
             th = theta.reshape(-1, theta.shape[-1])
             w_min = min(min_pair_weight(t, cfg.weighting) for t in th)
-        radius = pairs.sensing_radius(w_min, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+        radius = cfg.model.search_radius(cfg, w_min)
+        if radius is None:  # the model has no radius of the weights alone
+            return cfg.neighbor_radius if cfg.neighbor_radius is not None else float("inf")
         if cfg.neighbor_radius is not None:
             if cfg.neighbor_radius < radius:
                 warnings.warn(
@@ -176,9 +176,9 @@ class SafetyFilter:
                 raise ValueError(f"omega has shape {W_in.shape}, expected {(*lead, n, n)}")
             W = np.stack([validate_weight_matrix(w, n) for w in W_in.reshape(-1, n, n)])
         vel = None
-        if cfg.dynamics == "double_integrator":
+        if cfg.model.needs_velocities:
             if velocities is None:
-                raise ValueError("velocities are required for the double integrator")
+                raise ValueError(f"velocities are required for the {cfg.dynamics}")
             vel = check_vectors(velocities, "velocities", n, lead=lead)
         if single:
             vel = None if vel is None else vel[None]
@@ -213,7 +213,7 @@ class SafetyFilter:
         cfg = self.config
         E, n = theta.shape
         dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
-        if dense and not with_rows and cfg.solver == "exact" and cfg.dynamics == DYNAMICS[0]:
+        if dense and not with_rows and cfg.solver == "exact" and cfg.model.dense_kernel:
             return self._apply_dense(positions, nominal, theta, omega)
         pos = positions.reshape(E * n, 2)
         reach = None
@@ -223,46 +223,15 @@ class SafetyFilter:
         elif cfg.neighbor_radius is None:
             if floor is None:
                 floor = self._floor(theta, omega)
-            if cfg.dynamics == DYNAMICS[0]:
-                radii = pairs.agent_radii(floor[0], cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
-            else:
-                radii = pairs.double_integrator_radii(
-                    floor[0],
-                    velocities,
-                    cfg.gamma,
-                    cfg.safety_radius,
-                    cfg.lo,
-                    cfg.hi,
-                    cfg.barrier,
-                    cfg.gamma2,
-                    cfg.dt,
-                )
+            radii = cfg.model.culling_radii(cfg, floor[0], velocities)
             I, J = pairs.pairs_within_agent_radii(positions, radii, floor)
             reach = np.where(radii > 0, radii, np.inf).min(axis=(1, 2))
         else:
             radius = self.pair_radius(theta, omega, omega_min)
             I, J = pairs.candidate_pairs(positions, radius)
         weights = self.pair_weights(theta, omega, I, J, weighting)
-        if cfg.dynamics == "single_integrator":
-            rows = barriers.single_integrator_rows(
-                pos, weights, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi
-            )
-        else:
-            rows = barriers.double_integrator_rows(
-                pos,
-                velocities.reshape(E * n, 2),
-                weights,
-                I,
-                J,
-                cfg.gamma,
-                cfg.safety_radius,
-                cfg.lo,
-                cfg.hi,
-                barrier=cfg.barrier,
-                split=cfg.split,
-                gamma2=cfg.gamma2,
-                dt=cfg.dt,
-            )
+        vel = None if velocities is None else velocities.reshape(E * n, 2)
+        rows = cfg.model.rows(cfg, pos, vel, weights, I, J)
         nom = nominal.reshape(E * n, 2)
         actions, feasible, active, violation = solvers.solve(
             cfg.solver, nom, rows.flat_A, rows.flat_b, rows.offsets, cfg.lo, cfg.hi
@@ -344,7 +313,7 @@ class SafetyFilter:
             env = I // n
             starts = np.flatnonzero(np.r_[True, env[1:] != env[:-1]])
             out[env[starts]] = np.minimum.reduceat(rows.pair_h, starts)
-        if self.config.dynamics == "single_integrator":
+        if self.config.model.barrier_over_all_pairs():
             R2 = self.config.safety_radius**2
             if nearest is None and reach is not None and np.all(out <= reach**2 - R2):
                 return out

@@ -16,7 +16,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env import nominal
+from rsvo_env import dynamics, nominal
+from rsvo_env.dynamics import Dynamics
 from rsvo_env.planar import within
 from rsvo_env.validation import check_count, check_positive, check_real, check_theta, real_array
 
@@ -131,8 +132,13 @@ class Scenario:
 
     # -- parameters the env reads -------------------------------------------------------------
     @property
+    def model(self) -> Dynamics:
+        """The dynamics model (``dynamics`` names it)."""
+        return dynamics.get(self.dynamics, f"{self.name}.dynamics")
+
+    @property
     def limit_name(self) -> str:
-        return "a_max" if self.dynamics == "double_integrator" else "u_max"
+        return self.model.limit_name
 
     @property
     def num_agents(self) -> int:

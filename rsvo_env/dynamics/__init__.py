@@ -1,0 +1,31 @@
+"""Dynamics models by name: the registry (``docs/dynamics.md``). A name or an instance is
+accepted wherever a model is asked for; an unknown name raises naming it."""
+
+from __future__ import annotations
+
+from rsvo_env.dynamics.double_integrator import DoubleIntegrator, double_integrator_step
+from rsvo_env.dynamics.model import Dynamics
+from rsvo_env.dynamics.single_integrator import SingleIntegrator, single_integrator_step
+
+MODELS: dict[str, Dynamics] = {m.name: m for m in (SingleIntegrator(), DoubleIntegrator())}
+NAMES = tuple(MODELS)
+
+__all__ = [
+    "MODELS",
+    "NAMES",
+    "DoubleIntegrator",
+    "Dynamics",
+    "SingleIntegrator",
+    "double_integrator_step",
+    "get",
+    "single_integrator_step",
+]
+
+
+def get(model: str | Dynamics, field: str = "dynamics") -> Dynamics:
+    """The model of a name (``"single_integrator"``, ``"double_integrator"``) or an instance."""
+    if isinstance(model, Dynamics):
+        return model
+    if isinstance(model, str) and model in MODELS:
+        return MODELS[model]
+    raise ValueError(f"{field} = {model!r} is unknown; use one of {NAMES} or a Dynamics instance")

@@ -1,0 +1,83 @@
+"""What a dynamics model is to the rest of the code: the protocol the core, the filter, the
+observation and the scenarios call, so that none of them compares a model's name.
+
+A model owns its state update (the exact zero-order-hold step), the name of its input bound
+(speed or acceleration), its barrier rows and the radius beyond which none of them can bind
+(exact culling), the checks its input box must pass, and the velocity bound its episodes reach.
+A new model is one module with a subclass of :class:`Dynamics` plus one line in the registry
+(``rsvo_env/dynamics/__init__.py``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from rsvo_env.filter_config import FilterConfig
+    from rsvo_env.rows import Rows
+
+
+class Dynamics:
+    """Base class of the dynamics models (stateless: one instance serves every filter)."""
+
+    name: ClassVar[str] = ""
+    # the scenario parameter that bounds the input: "u_max" (speed) or "a_max" (acceleration)
+    limit_name: ClassVar[str] = "u_max"
+    # whether the filter's rows need the agents' velocities
+    needs_velocities: ClassVar[bool] = False
+    # whether the compiled dense filter (rsvo_env.solvers.dense) computes this model's rows
+    dense_kernel: ClassVar[bool] = False
+
+    def step(
+        self, positions: NDArray, velocities: NDArray, u: NDArray, dt: float
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The exact zero-order-hold step: (positions, velocities) after ``dt`` with ``u``."""
+        raise NotImplementedError
+
+    def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
+        """Refuse an input box under which this model's guarantee does not hold."""
+
+    def rows(
+        self,
+        cfg: FilterConfig,
+        positions: NDArray,
+        velocities: NDArray | None,
+        weights: NDArray,
+        I: NDArray,
+        J: NDArray,
+    ) -> Rows:
+        """Every agent's barrier rows for the pairs (I, J), flat agent indices."""
+        raise NotImplementedError
+
+    def culling_radii(
+        self, cfg: FilterConfig, omega_floor: NDArray, velocities: NDArray | None
+    ) -> NDArray[np.float64]:
+        """Per agent and weight floor (E, N, K), the distance beyond which none of its rows
+        with a positive weight can bind in the current state."""
+        raise NotImplementedError
+
+    def search_radius(self, cfg: FilterConfig, omega_min: float) -> float | None:
+        """The one radius of a pair search from the smallest weight, or None where the model
+        has none (the state decides it: the per-agent search is used)."""
+        return None
+
+    def barrier_over_all_pairs(self) -> bool:
+        """Whether ``min_h`` of a scene must cover every pair, not only those examined."""
+        return False
+
+    def reach(self, params: dict[str, Any], limit: float, horizon: float) -> tuple[float, float]:
+        """How far (position) and how fast (velocity) an agent can get from rest, or from the
+        scenario's start speed, within ``horizon`` seconds under the input bound ``limit``."""
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+    def __eq__(self, other: object) -> bool:
+        return type(self) is type(other)
+
+    def __hash__(self) -> int:
+        return hash(type(self))

@@ -1,0 +1,66 @@
+"""The single integrator (paper, Sec. III-B): ``x' = u``, the input a velocity."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rsvo_env.dynamics.model import Dynamics
+
+if TYPE_CHECKING:
+    from rsvo_env.filter_config import FilterConfig
+    from rsvo_env.rows import Rows
+
+
+def single_integrator_step(
+    x: NDArray[np.float64], u: NDArray[np.float64], dt: float
+) -> NDArray[np.float64]:
+    """``x+ = x + dt u``."""
+    return x + dt * u
+
+
+class SingleIntegrator(Dynamics):
+    """Rows of the paper's QP (eq. ``qp``), the sensing radius of ``docs/math.md``."""
+
+    name = "single_integrator"
+    limit_name = "u_max"
+    dense_kernel = True
+
+    def step(self, positions, velocities, u, dt):
+        # the velocity of a single integrator is the control it integrated
+        return single_integrator_step(positions, u, dt), u.copy()
+
+    def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
+        if not ((lo <= 0).all() and (hi >= 0).all()):
+            # u = 0 satisfies every row while h >= 0 only if the box holds 0: without it a pair
+            # in the safe set can have no safe action
+            raise ValueError(
+                f"FilterConfig: the single-integrator box must contain 0 (u_min <= 0 <= u_max), "
+                f"got u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
+            )
+
+    def rows(self, cfg, positions, velocities, weights, I, J) -> Rows:
+        from rsvo_env import barriers
+
+        return barriers.single_integrator_rows(
+            positions, weights, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi
+        )
+
+    def culling_radii(self, cfg, omega_floor, velocities):
+        from rsvo_env import pairs
+
+        return pairs.agent_radii(omega_floor, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+
+    def search_radius(self, cfg, omega_min):
+        from rsvo_env import pairs
+
+        return pairs.sensing_radius(omega_min, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+
+    def barrier_over_all_pairs(self) -> bool:
+        # h is the squared gap: the nearest pair, examined or not, is the scene's smallest
+        return True
+
+    def reach(self, params: dict[str, Any], limit: float, horizon: float) -> tuple[float, float]:
+        return limit * horizon, limit
