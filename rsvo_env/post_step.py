@@ -58,11 +58,28 @@ def by_hooks(
         before, s.positions, s.starts, s.goals, s.nearest, s.rh_active, at_goal, requested,
         applied, stats,
     )  # fmt: skip
-    first_arrival = at_goal & ~s.reached
-    s.reached |= at_goal
+    first_arrival, terminated, truncated = _episode_end(
+        at_goal, s.reached, sim.metrics.counts, sim.max_steps
+    )
     reward = sim.scenario.reward(before, s.positions, s.goals, first_arrival, sim.reward_weights)
-    terminated = at_goal.all(axis=-1)
-    return reward, terminated, ~terminated & (sim.metrics.steps >= sim.max_steps)
+    return reward, terminated, truncated
+
+
+@njit(cache=True)
+def _episode_end(at_goal, reached, counts, max_steps):
+    """First arrivals (marked in ``reached``), terminated envs (every agent at its goal) and
+    truncated ones (not terminated, ``max_steps`` reached): the one definition both paths use."""
+    E, n = at_goal.shape
+    first = np.empty((E, n), dtype=np.bool_)
+    terminated = np.ones(E, dtype=np.bool_)
+    truncated = np.empty(E, dtype=np.bool_)
+    for e in range(E):
+        for i in range(n):
+            first[e, i] = at_goal[e, i] and not reached[e, i]
+            reached[e, i] = reached[e, i] or at_goal[e, i]
+            terminated[e] = terminated[e] and at_goal[e, i]
+        truncated[e] = not terminated[e] and counts[e, 0] >= max_steps
+    return first, terminated, truncated
 
 
 @njit(cache=True)
@@ -82,19 +99,11 @@ def _fused(x, before, goals, starts, reached, k, tol, rh_on, trigger, weights, c
     _accumulate(counts, min_distance, infeasible, sums, arrival, min_barrier, before, x, starts,
                 goals, applied, requested, nearest, rh, at_goal, feasible, min_h, dt,
                 collision_below, series)  # fmt: skip
-    first = at_goal & ~reached
-    terminated = np.ones(E, dtype=np.bool_)
-    for e in range(E):
-        for i in range(n):
-            reached[e, i] = reached[e, i] or at_goal[e, i]
-            terminated[e] = terminated[e] and at_goal[e, i]
+    first, terminated, truncated = _episode_end(at_goal, reached, counts, max_steps)
     reward = np.empty((E, n))
     _reward_terms(before.reshape(-1, 2), x.reshape(-1, 2), goals.reshape(-1, 2),
                   first.reshape(-1), weights[0], weights[1], weights[2],
                   reward.reshape(-1))  # fmt: skip
-    truncated = np.empty(E, dtype=np.bool_)
-    for e in range(E):
-        truncated[e] = not terminated[e] and counts[e, 0] >= max_steps
     return nearest, neighbors, at_goal, rh, reward, terminated, truncated
 
 
