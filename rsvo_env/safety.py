@@ -88,6 +88,8 @@ class SafetyFilter:
         """Radius of the pair search: the sensing radius (single integrator) or the user's.
         ``omega_min``: each scene's smallest weight, when the caller keeps it."""
         cfg = self.config
+        if not cfg.model.radius_from_weights:  # the state decides: no radius of the weights
+            return cfg.neighbor_radius if cfg.neighbor_radius is not None else float("inf")
         if omega_min is not None:
             w_min = float(np.min(omega_min))
         elif omega is not None:
@@ -96,8 +98,6 @@ class SafetyFilter:
             th = theta.reshape(-1, theta.shape[-1])
             w_min = min(min_pair_weight(t, cfg.weighting) for t in th)
         radius = cfg.model.search_radius(cfg, w_min)
-        if radius is None:  # the model has no radius of the weights alone
-            return cfg.neighbor_radius if cfg.neighbor_radius is not None else float("inf")
         if cfg.neighbor_radius is not None:
             if cfg.neighbor_radius < radius:
                 warnings.warn(

@@ -30,6 +30,9 @@ class Dynamics:
     needs_velocities: ClassVar[bool] = False
     # whether the compiled dense filter (rsvo_env.solvers.dense) computes this model's rows
     dense_kernel: ClassVar[bool] = False
+    # whether one radius from the smallest weight alone bounds every binding pair
+    # (:meth:`search_radius`); else the state decides it (:meth:`culling_radii`)
+    radius_from_weights: ClassVar[bool] = False
 
     def step(
         self, positions: NDArray, velocities: NDArray, u: NDArray, dt: float
@@ -59,10 +62,10 @@ class Dynamics:
         with a positive weight can bind in the current state."""
         raise NotImplementedError
 
-    def search_radius(self, cfg: FilterConfig, omega_min: float) -> float | None:
-        """The one radius of a pair search from the smallest weight, or None where the model
-        has none (the state decides it: the per-agent search is used)."""
-        return None
+    def search_radius(self, cfg: FilterConfig, omega_min: float) -> float:
+        """The one radius of a pair search from the smallest weight (models with
+        ``radius_from_weights``)."""
+        raise NotImplementedError
 
     def barrier_over_all_pairs(self) -> bool:
         """Whether ``min_h`` of a scene must cover every pair, not only those examined."""

@@ -27,6 +27,7 @@ class SingleIntegrator(Dynamics):
     name = "single_integrator"
     limit_name = "u_max"
     dense_kernel = True
+    radius_from_weights = True
 
     def step(self, positions, velocities, u, dt):
         # the velocity of a single integrator is the control it integrated
