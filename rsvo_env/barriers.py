@@ -73,8 +73,9 @@ def single_integrator_row(xi0, xi1, xj0, xj1, w, gamma, R2):
 
 
 @njit(cache=True)
-def _single_integrator_pairs(x, I, J, w, gamma, R2):
-    """Per pair: ``A_i = -2 dx``, ``h = |dx|^2 - R^2``, ``b = omega gamma h`` for both agents."""
+def _single_integrator_pairs(x, I, J, w, gamma, radii):
+    """Per pair: ``A_i = -2 dx``, ``h = |dx|^2 - (r_i + r_j)^2``, ``b = omega gamma h`` for
+    both agents."""
     P = I.shape[0]
     A_i = np.empty((P, 2))
     b_i = np.empty(P)
@@ -82,8 +83,9 @@ def _single_integrator_pairs(x, I, J, w, gamma, R2):
     h = np.empty(P)
     for p in range(P):
         i, j = I[p], J[p]
+        R = radii[i] + radii[j]
         ax, ay, b_i[p], h[p] = single_integrator_row(
-            x[i, 0], x[i, 1], x[j, 0], x[j, 1], w[p, 0], gamma, R2
+            x[i, 0], x[i, 1], x[j, 0], x[j, 1], w[p, 0], gamma, R * R
         )
         A_i[p, 0] = ax
         A_i[p, 1] = ay
@@ -97,7 +99,7 @@ def single_integrator_rows(
     I: NDArray,
     J: NDArray,
     gamma: float,
-    safety_radius: float,
+    safety_radius: float | NDArray,
     lo: NDArray,
     hi: NDArray,
     cull: bool = True,
@@ -106,6 +108,8 @@ def single_integrator_rows(
 
     ``omega_pairs`` (P, 2): column 0 is omega of agent ``I[p]`` against ``J[p]``, column 1 the
     other way round; the two sum to 1, so the two rows sum to eq. ``centralized-cbf``.
+    ``safety_radius``: every pair's safe distance, or (n,) body radii (a pair's is
+    ``r_i + r_j``); ``lo``, ``hi``: one box (2,) or one per agent (n, 2).
     """
     n = positions.shape[0]
     A_i, b_i, b_j, h = _single_integrator_pairs(
@@ -114,10 +118,18 @@ def single_integrator_rows(
         J,
         np.ascontiguousarray(omega_pairs, dtype=np.float64),
         float(gamma),
-        float(safety_radius) ** 2,
+        body_radii(safety_radius, n),
     )
     none = np.zeros(len(I), dtype=bool)
     return finish(n, I, J, A_i, b_i, b_j, h, lo, hi, ~none, none, none, cull)
+
+
+def body_radii(safety_radius: float | NDArray, n: int) -> NDArray[np.float64]:
+    """(n,) body radii: the given ones, or half of one pair distance for every agent (exact:
+    ``R / 2 + R / 2 == R``, so identical agents keep the pair distance to the last bit)."""
+    if np.ndim(safety_radius) == 0:
+        return np.full(n, 0.5 * float(safety_radius))
+    return np.ascontiguousarray(safety_radius, dtype=np.float64)
 
 
 def _tangential_rows(

@@ -23,12 +23,13 @@ from gymnasium.utils import seeding
 from numpy.typing import NDArray
 
 from rsvo_env import observation, planar, post_step
+from rsvo_env.filter_result import FilterResult, merge_stats
 from rsvo_env.metrics import EpisodeMetrics, collided
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_neighbors
 from rsvo_env.pairs import Floor
 from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting, check_weighting
-from rsvo_env.safety import FilterResult, SafetyFilter, merge_stats
+from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario
 from rsvo_env.stall import StallClock, goal_distance
 from rsvo_env.state import State

@@ -44,14 +44,16 @@ def sensing_radius(
 
 
 def agent_radii(
-    omega_floor: NDArray, gamma: float, safety_radius: float, lo: NDArray, hi: NDArray
+    omega_floor: NDArray, gamma: float, speed: NDArray, reach: NDArray
 ) -> NDArray[np.float64]:
     """Per agent, the distance beyond which none of its rows with a positive weight can bind:
-    :func:`sensing_radius` of its own smallest positive weight (0 for an agent without one)."""
-    u = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
+    :func:`sensing_radius` of its own smallest positive weight (0 for an agent without one).
+    ``omega_floor`` (E, N, K); ``speed`` (E, N): its box's largest input vector; ``reach``
+    (E, N): the largest safe distance of its pairs, ``r_i + max_j r_j``."""
+    u, R = speed[..., None], reach[..., None]
     searched = np.isfinite(omega_floor)
     wg = np.where(searched & (omega_floor > 0), omega_floor, 1.0) * gamma
-    r = (u + np.sqrt(u * u + (wg * safety_radius) ** 2)) / wg
+    r = (u + np.sqrt(u * u + (wg * R) ** 2)) / wg
     # a floor at or below 0 (a weight within rounding of 0) binds at any distance; the root is
     # exact only in exact arithmetic, so a pair right at it stays examined
     r = np.where(omega_floor > 0, r * (1.0 + 1e-9), np.inf)

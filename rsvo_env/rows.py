@@ -90,13 +90,14 @@ def pack(n, I, J, A_i, b_i, b_j, h, exists, unrec, capped, lo, hi, cull):
             continue
         ax = A_i[p, 0]
         ay = A_i[p, 1]
-        # box support of +A_i (agent I) and of -A_i (agent J)
-        if not cull or b_i[p] < support(ax, ay, lo[0], lo[1], hi[0], hi[1]):
+        i, j = I[p], J[p]
+        # box support of +A_i over agent I's box and of -A_i over agent J's
+        if not cull or b_i[p] < support(ax, ay, lo[i, 0], lo[i, 1], hi[i, 0], hi[i, 1]):
             keep[p, 0] = True
-            offsets[I[p] + 1] += 1
-        if not cull or b_j[p] < support(-ax, -ay, lo[0], lo[1], hi[0], hi[1]):
+            offsets[i + 1] += 1
+        if not cull or b_j[p] < support(-ax, -ay, lo[j, 0], lo[j, 1], hi[j, 0], hi[j, 1]):
             keep[p, 1] = True
-            offsets[J[p] + 1] += 1
+            offsets[j + 1] += 1
     for i in range(n):
         offsets[i + 1] += offsets[i]
     R = offsets[n]
@@ -145,8 +146,10 @@ def finish(
     """Both agents' rows of each pair, exact culling, storage by agent.
 
     Culling (``docs/math.md``): a row whose right side is at least the largest value its left
-    side takes over the box cannot bind anywhere in the box, so dropping it changes no solution.
+    side takes over its agent's box cannot bind anywhere in that box, so dropping it changes no
+    solution. ``lo``, ``hi``: one box (2,) or one per agent (n, 2).
     """
+    lo, hi = (np.ascontiguousarray(np.broadcast_to(x, (n, 2)), dtype=np.float64) for x in (lo, hi))
     A, b, offsets, nb, hh, un, cp = pack(
         n, I, J, np.ascontiguousarray(A_i), b_i, b_j, h, exists, unrecoverable, capped, lo, hi,
         cull,

@@ -12,14 +12,14 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env import barriers, pairs, solvers
+from rsvo_env.bodies import Bodies, check_per_agent
 from rsvo_env.filter_config import FilterConfig
+from rsvo_env.filter_result import FilterResult, per_env
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_distance
 from rsvo_env.planar import norm
 from rsvo_env.responsibility import (
@@ -35,44 +35,6 @@ from rsvo_env.solvers import dense as dense_solver
 from rsvo_env.validation import check_theta, check_vectors, real_array
 
 
-@dataclass(slots=True)
-class FilterResult:
-    """What the filter decided for each agent (the ``certify_action`` contract: action + flag).
-
-    Per-agent arrays have the input's leading shape, (N, ...) or (E, N, ...); per-scene values
-    (``min_h``, ``n_unrecoverable_pairs``, ``n_capped_shares``) are scalars for one scene and (E,)
-    arrays for a batch. ``feasible[i]`` is False when agent i's QP had no solution; its action is
-    then the one that minimises the largest normalised violation, never the nominal, and
-    ``max_violation[i]`` says by how much (metres of half-plane offset, 0 when feasible).
-    """
-
-    actions: NDArray[np.float64]
-    feasible: NDArray[np.bool_]
-    intervention: NDArray[np.float64]
-    active: NDArray[np.int64]
-    min_h: Any
-    max_violation: NDArray[np.float64]
-    n_rows: NDArray[np.int64]
-    n_unrecoverable_pairs: Any
-    n_capped_shares: Any
-    rows: barriers.Rows | None = field(repr=False)
-
-    def squeeze(self) -> FilterResult:
-        """The single-scene result of a batch of one."""
-        return FilterResult(
-            actions=self.actions[0],
-            feasible=self.feasible[0],
-            intervention=self.intervention[0],
-            active=self.active[0],
-            min_h=float(self.min_h[0]),
-            max_violation=self.max_violation[0],
-            n_rows=self.n_rows[0],
-            n_unrecoverable_pairs=int(self.n_unrecoverable_pairs[0]),
-            n_capped_shares=int(self.n_capped_shares[0]),
-            rows=self.rows,
-        )
-
-
 class SafetyFilter:
     """The decentralized responsibility-associated CBF filter (paper, Algorithm 1), batched."""
 
@@ -83,7 +45,11 @@ class SafetyFilter:
         self._last_floor: tuple[NDArray, pairs.Floor] | None = None
 
     def pair_radius(
-        self, theta: NDArray, omega: NDArray | None, omega_min: NDArray | None = None
+        self,
+        theta: NDArray,
+        omega: NDArray | None,
+        omega_min: NDArray | None = None,
+        bodies: Bodies | None = None,
     ) -> float:
         """Radius of the pair search: the sensing radius (single integrator) or the user's.
         ``omega_min``: each scene's smallest weight, when the caller keeps it."""
@@ -97,7 +63,9 @@ class SafetyFilter:
         else:
             th = theta.reshape(-1, theta.shape[-1])
             w_min = min(min_pair_weight(t, cfg.weighting) for t in th)
-        radius = cfg.model.search_radius(cfg, w_min)
+        if bodies is None:  # the config's: the same radius and box for every agent
+            bodies = Bodies.of(cfg, 1, 1)
+        radius = cfg.model.search_radius(cfg, w_min, bodies)
         if cfg.neighbor_radius is not None:
             if cfg.neighbor_radius < radius:
                 warnings.warn(
@@ -144,12 +112,17 @@ class SafetyFilter:
         theta: ArrayLike,
         velocities: ArrayLike | None = None,
         omega: ArrayLike | None = None,
+        radii: ArrayLike | None = None,
+        u_max: ArrayLike | None = None,
     ) -> FilterResult:
         """Safe actions (paper, eq. ``qp`` per agent) for one scene or a batch of scenes.
 
         positions, nominal, velocities: (N, 2) or (E, N, 2) in physical units; theta: (N,) or
         (E, N) personality scores; omega: optional weight matrix, (N, N) or (E, N, N), that
-        replaces the configured weighting (validated on every call). Bad input raises
+        replaces the configured weighting (validated on every call); radii: optional body
+        radii, (N,) or (E, N), a pair safe at ``r_i + r_j`` (default: ``safety_radius / 2``
+        each); u_max: optional per-agent input bound, (N,) or (E, N), the box
+        ``[-u_max_i, u_max_i]`` per component (default: the config's box). Bad input raises
         ``ValueError`` naming field, agent and value.
         """
         cfg = self.config
@@ -175,6 +148,7 @@ class SafetyFilter:
             if W_in.shape != (*lead, n, n):
                 raise ValueError(f"omega has shape {W_in.shape}, expected {(*lead, n, n)}")
             W = np.stack([validate_weight_matrix(w, n) for w in W_in.reshape(-1, n, n)])
+        bodies = self._bodies(lead, n, radii, u_max)
         vel = None
         if cfg.model.needs_velocities:
             if velocities is None:
@@ -182,8 +156,33 @@ class SafetyFilter:
             vel = check_vectors(velocities, "velocities", n, lead=lead)
         if single:
             vel = None if vel is None else vel[None]
-            return self.apply(pos[None], nom[None], th[None], vel, W, with_rows=True).squeeze()
-        return self.apply(pos, nom, th, vel, W, with_rows=True)
+            return self.apply(
+                pos[None], nom[None], th[None], vel, W, with_rows=True, bodies=bodies
+            ).squeeze()
+        return self.apply(pos, nom, th, vel, W, with_rows=True, bodies=bodies)
+
+    def _bodies(
+        self, lead: tuple[int, ...], n: int, radii: ArrayLike | None, u_max: ArrayLike | None
+    ) -> Bodies | None:
+        """The checked per-agent radii and limits of :meth:`filter` (None: the config's)."""
+        if radii is None and u_max is None:
+            return None
+        cfg = self.config
+        if not cfg.model.per_agent_bodies:
+            raise ValueError(
+                f"radii and u_max per agent are not available for the {cfg.dynamics}: it takes "
+                "one safety_radius and one box (FilterConfig)"
+            )
+        if u_max is not None and cfg.u_min is not None:
+            raise ValueError(
+                "u_max per agent gives each agent the box [-u_max_i, u_max_i]; it cannot be "
+                f"combined with FilterConfig.u_min = {cfg.u_min!r}"
+            )
+        shape = (*lead, n)
+        r = None if radii is None else check_per_agent(radii, "radii", shape)
+        u = None if u_max is None else check_per_agent(u_max, "u_max", shape)
+        E = lead[0] if lead else 1
+        return Bodies.of(cfg, E, n, r, u)
 
     def apply(
         self,
@@ -197,6 +196,7 @@ class SafetyFilter:
         nearest: NDArray[np.float64] | None = None,
         floor: pairs.Floor | None = None,
         weighting: Sequence[str] | None = None,
+        bodies: Bodies | None = None,
     ) -> FilterResult:
         """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
 
@@ -208,13 +208,15 @@ class SafetyFilter:
         weights, which the large-N path needs. There, each agent examines its neighbours within
         its own radius (:func:`pairs.agent_radii`, :func:`pairs.double_integrator_radii` from
         the current velocities): exact culling, so the rows kept, and the solution, are those
-        of all pairs.
+        of all pairs. ``bodies``: each agent's radius and box (None: the config's).
         """
         cfg = self.config
         E, n = theta.shape
+        if bodies is None:
+            bodies = Bodies.of(cfg, E, n)
         dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
         if dense and not with_rows and cfg.solver == "exact" and cfg.model.dense_kernel:
-            return self._apply_dense(positions, nominal, theta, omega)
+            return self._apply_dense(positions, nominal, theta, omega, bodies)
         pos = positions.reshape(E * n, 2)
         reach = None
         if dense:
@@ -223,18 +225,18 @@ class SafetyFilter:
         elif cfg.neighbor_radius is None:
             if floor is None:
                 floor = self._floor(theta, omega)
-            radii = cfg.model.culling_radii(cfg, floor[0], velocities)
+            radii = cfg.model.culling_radii(cfg, floor[0], velocities, bodies)
             I, J = pairs.pairs_within_agent_radii(positions, radii, floor)
             reach = np.where(radii > 0, radii, np.inf).min(axis=(1, 2))
         else:
-            radius = self.pair_radius(theta, omega, omega_min)
+            radius = self.pair_radius(theta, omega, omega_min, bodies)
             I, J = pairs.candidate_pairs(positions, radius)
         weights = self.pair_weights(theta, omega, I, J, weighting)
         vel = None if velocities is None else velocities.reshape(E * n, 2)
-        rows = cfg.model.rows(cfg, pos, vel, weights, I, J)
+        rows = cfg.model.rows(cfg, pos, vel, weights, I, J, bodies)
         nom = nominal.reshape(E * n, 2)
         actions, feasible, active, violation = solvers.solve(
-            cfg.solver, nom, rows.flat_A, rows.flat_b, rows.offsets, cfg.lo, cfg.hi
+            cfg.solver, nom, rows.flat_A, rows.flat_b, rows.offsets, bodies.lo, bodies.hi
         )
         env_of_row = rows.owner // n
         return FilterResult(
@@ -242,7 +244,7 @@ class SafetyFilter:
             feasible=feasible.reshape(E, n),
             intervention=norm(actions - nom).reshape(E, n),
             active=active.reshape(E, n),
-            min_h=self._min_h(rows, positions, I, dense, nearest, reach),
+            min_h=self._min_h(rows, positions, I, dense, bodies, nearest, reach),
             max_violation=violation.reshape(E, n),
             n_rows=rows.counts.reshape(E, n),
             n_unrecoverable_pairs=per_env(env_of_row, rows.flat_unrecoverable, E) // 2,
@@ -265,14 +267,19 @@ class SafetyFilter:
         return last[1]
 
     def _apply_dense(
-        self, positions: NDArray, nominal: NDArray, theta: NDArray, omega: NDArray | None
+        self,
+        positions: NDArray,
+        nominal: NDArray,
+        theta: NDArray,
+        omega: NDArray | None,
+        bodies: Bodies,
     ) -> FilterResult:
         cfg = self.config
         if omega is None:
             omega = weight_matrix(theta, cfg.weighting)
         actions, feasible, active, violation, n_rows, min_h, intervention = (
             dense_solver.filter_dense(
-                positions, nominal, omega, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi
+                positions, nominal, omega, cfg.gamma, bodies.radii, bodies.lo, bodies.hi
             )
         )
         zeros = np.zeros(len(min_h), dtype=np.int64)
@@ -295,6 +302,7 @@ class SafetyFilter:
         positions: NDArray,
         I: NDArray,
         dense: bool,
+        bodies: Bodies,
         nearest: NDArray | None = None,
         reach: NDArray | None = None,
     ) -> NDArray[np.float64]:
@@ -314,36 +322,26 @@ class SafetyFilter:
             starts = np.flatnonzero(np.r_[True, env[1:] != env[:-1]])
             out[env[starts]] = np.minimum.reduceat(rows.pair_h, starts)
         if self.config.model.barrier_over_all_pairs():
-            R2 = self.config.safety_radius**2
+            # no pair beyond the reach has a smaller barrier than reach^2 - (2 r_max)^2
+            R2 = (2.0 * bodies.r_max) ** 2
             if nearest is None and reach is not None and np.all(out <= reach**2 - R2):
                 return out
-            d = (nearest_distance(positions) if nearest is None else nearest).min(axis=-1)
-            out = np.minimum(out, d**2 - R2)
+            if bodies.uniform:
+                d = (nearest_distance(positions) if nearest is None else nearest).min(axis=-1)
+                return np.minimum(out, d**2 - R2)
+            return np.minimum(out, nearest_barrier(positions, bodies))
         return out
 
 
-def per_env(env: NDArray[np.int64], flags: NDArray[np.bool_], E: int) -> NDArray[np.int64]:
-    """(E,) how many of the rows of each env are flagged."""
-    return np.bincount(env[flags], minlength=E).astype(np.int64)
-
-
-def merge_stats(stats: dict[str, Any] | None, res: FilterResult) -> dict[str, Any]:
-    """The filter stage's stats after one more stacked filter: feasible only if every filter
-    was, the largest violation, counts summed, the smallest barrier; ``active`` the last's."""
-    if stats is None:
-        return {
-            "feasible": res.feasible,
-            "max_violation": res.max_violation,
-            "n_unrecoverable_pairs": res.n_unrecoverable_pairs,
-            "n_capped_shares": res.n_capped_shares,
-            "min_h": res.min_h,
-            "active": res.active,
-        }
-    return {
-        "feasible": stats["feasible"] & res.feasible,
-        "max_violation": np.maximum(stats["max_violation"], res.max_violation),
-        "n_unrecoverable_pairs": stats["n_unrecoverable_pairs"] + res.n_unrecoverable_pairs,
-        "n_capped_shares": stats["n_capped_shares"] + res.n_capped_shares,
-        "min_h": np.minimum(stats["min_h"], res.min_h),
-        "active": res.active,
-    }
+def nearest_barrier(positions: NDArray, bodies: Bodies) -> NDArray[np.float64]:
+    """(E,) the smallest ``|x_i - x_j|^2 - (r_i + r_j)^2`` of each scene over all pairs: the
+    pairs within the nearest distance plus twice the largest radius hold it."""
+    E, n = positions.shape[:2]
+    d = nearest_distance(positions).min(axis=-1)
+    reach = float((d + 2.0 * bodies.r_max).max())
+    I, J = pairs.candidate_pairs(positions, reach)
+    out = np.full(E, np.inf)
+    flat = positions.reshape(-1, 2)
+    h = ((flat[I] - flat[J]) ** 2).sum(axis=-1) - bodies.pair_distance(I, J) ** 2
+    np.minimum.at(out, I // n, h)
+    return out

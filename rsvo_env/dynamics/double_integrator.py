@@ -51,7 +51,7 @@ class DoubleIntegrator(Dynamics):
                 "braking barrier needs dt^2 (a_max + |u_max|) < safety_radius"
             )
 
-    def rows(self, cfg, positions, velocities, weights, I, J) -> Rows:
+    def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:
         from rsvo_env import barriers
 
         return barriers.double_integrator_rows(
@@ -59,7 +59,7 @@ class DoubleIntegrator(Dynamics):
             barrier=cfg.barrier, split=cfg.split, gamma2=cfg.gamma2, dt=cfg.dt,
         )  # fmt: skip
 
-    def culling_radii(self, cfg, omega_floor, velocities):
+    def culling_radii(self, cfg, omega_floor, velocities, bodies):
         from rsvo_env import pairs
 
         return pairs.double_integrator_radii(

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 if TYPE_CHECKING:
+    from rsvo_env.bodies import Bodies
     from rsvo_env.filter_config import FilterConfig
     from rsvo_env.rows import Rows
 
@@ -33,6 +34,8 @@ class Dynamics:
     # whether one radius from the smallest weight alone bounds every binding pair
     # (:meth:`search_radius`); else the state decides it (:meth:`culling_radii`)
     radius_from_weights: ClassVar[bool] = False
+    # whether its agents may each have their own body radius and input box (rsvo_env.bodies)
+    per_agent_bodies: ClassVar[bool] = False
 
     def step(
         self, positions: NDArray, velocities: NDArray, u: NDArray, dt: float
@@ -51,18 +54,19 @@ class Dynamics:
         weights: NDArray,
         I: NDArray,
         J: NDArray,
+        bodies: Bodies,
     ) -> Rows:
         """Every agent's barrier rows for the pairs (I, J), flat agent indices."""
         raise NotImplementedError
 
     def culling_radii(
-        self, cfg: FilterConfig, omega_floor: NDArray, velocities: NDArray | None
+        self, cfg: FilterConfig, omega_floor: NDArray, velocities: NDArray | None, bodies: Bodies
     ) -> NDArray[np.float64]:
         """Per agent and weight floor (E, N, K), the distance beyond which none of its rows
         with a positive weight can bind in the current state."""
         raise NotImplementedError
 
-    def search_radius(self, cfg: FilterConfig, omega_min: float) -> float:
+    def search_radius(self, cfg: FilterConfig, omega_min: float, bodies: Bodies) -> float:
         """The one radius of a pair search from the smallest weight (models with
         ``radius_from_weights``)."""
         raise NotImplementedError

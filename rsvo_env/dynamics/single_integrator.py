@@ -28,6 +28,7 @@ class SingleIntegrator(Dynamics):
     limit_name = "u_max"
     dense_kernel = True
     radius_from_weights = True
+    per_agent_bodies = True
 
     def step(self, positions, velocities, u, dt):
         # the velocity of a single integrator is the control it integrated
@@ -42,22 +43,27 @@ class SingleIntegrator(Dynamics):
                 f"got u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
             )
 
-    def rows(self, cfg, positions, velocities, weights, I, J) -> Rows:
+    def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:
         from rsvo_env import barriers
 
         return barriers.single_integrator_rows(
-            positions, weights, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi
+            positions, weights, I, J, cfg.gamma, bodies.radii, bodies.lo, bodies.hi
         )
 
-    def culling_radii(self, cfg, omega_floor, velocities):
+    def culling_radii(self, cfg, omega_floor, velocities, bodies):
         from rsvo_env import pairs
 
-        return pairs.agent_radii(omega_floor, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+        E, n = omega_floor.shape[:2]
+        reach = bodies.radii.reshape(E, n) + bodies.r_max[:, None]
+        return pairs.agent_radii(omega_floor, cfg.gamma, bodies.speed.reshape(E, n), reach)
 
-    def search_radius(self, cfg, omega_min):
+    def search_radius(self, cfg, omega_min, bodies):
         from rsvo_env import pairs
 
-        return pairs.sensing_radius(omega_min, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+        # the widest box and the largest pair distance of the scene bound every pair's
+        c = np.maximum(np.abs(bodies.lo), np.abs(bodies.hi)).max(axis=0)
+        R = 2.0 * float(bodies.r_max.max(initial=0.0))
+        return pairs.sensing_radius(omega_min, cfg.gamma, R, -c, c)
 
     def barrier_over_all_pairs(self) -> bool:
         # h is the squared gap: the nearest pair, examined or not, is the scene's smallest

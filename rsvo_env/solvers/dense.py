@@ -18,18 +18,19 @@ from rsvo_env.solvers.exact import PARALLEL_THRESHOLD, solve_rows
 
 @njit(cache=True, inline="always")
 def _one_env(
-    e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, violation, n_rows, moved
+    e, x, nom, omega, gamma, radii, lo, hi, rows, out, feasible, active, violation, n_rows, moved
 ):  # fmt: skip
     n = x.shape[1]
-    lo0, lo1, hi0, hi1 = lo[0], lo[1], hi[0], hi[1]
     min_h = np.inf
     for i in range(n):
         k = 0
+        lo0, lo1, hi0, hi1 = lo[e, i, 0], lo[e, i, 1], hi[e, i, 0], hi[e, i, 1]
         for j in range(n):
             if j == i:
                 continue
+            R = radii[e, i] + radii[e, j]
             ax, ay, b, h = single_integrator_row(
-                x[e, i, 0], x[e, i, 1], x[e, j, 0], x[e, j, 1], omega[e, i, j], gamma, R2
+                x[e, i, 0], x[e, i, 1], x[e, j, 0], x[e, j, 1], omega[e, i, j], gamma, R * R
             )
             min_h = min(min_h, h)
             if b < support(ax, ay, lo0, lo1, hi0, hi1):  # else it cannot bind in the box
@@ -49,23 +50,23 @@ def _one_env(
 
 
 @njit(cache=True)
-def _serial(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, n_rows, min_h,
+def _serial(x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violation, n_rows, min_h,
             moved):  # fmt: skip
     rows = np.empty((max(x.shape[1] - 1, 1), 3))
     for e in range(x.shape[0]):
         min_h[e] = _one_env(
-            e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, violation, n_rows,
+            e, x, nom, omega, gamma, radii, lo, hi, rows, out, feasible, active, violation, n_rows,
             moved,
         )  # fmt: skip
 
 
 @njit(cache=True, parallel=True)
-def _parallel(x, nom, omega, gamma, R2, lo, hi, out, feasible, active, violation, n_rows, min_h,
+def _parallel(x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violation, n_rows, min_h,
               moved):  # fmt: skip
     for e in prange(x.shape[0]):
         rows = np.empty((max(x.shape[1] - 1, 1), 3))
         min_h[e] = _one_env(
-            e, x, nom, omega, gamma, R2, lo, hi, rows, out, feasible, active, violation, n_rows,
+            e, x, nom, omega, gamma, radii, lo, hi, rows, out, feasible, active, violation, n_rows,
             moved,
         )  # fmt: skip
 
@@ -89,13 +90,14 @@ def filter_dense(
     nominal: NDArray[np.float64],
     omega: NDArray[np.float64],
     gamma: float,
-    safety_radius: float,
+    radii: NDArray[np.float64],
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
     """Safe single-integrator controls of E envs x N agents, every pair of an env examined.
 
-    positions, nominal (E, N, 2); omega (E, N, N). Returns actions (E, N, 2), feasible,
+    positions, nominal (E, N, 2); omega (E, N, N); radii (E, N) body radii (a pair is safe at
+    ``r_i + r_j``); lo, hi (E, N, 2) each agent's box. Returns actions (E, N, 2), feasible,
     active row count, largest normalised violation, rows kept after culling (E, N), each env's
     smallest barrier value (E,), and the intervention |u_safe - u_nominal| (E, N).
     """
@@ -109,9 +111,9 @@ def filter_dense(
         np.asarray(nominal, dtype=np.float64),
         np.asarray(omega, dtype=np.float64),
         float(gamma),
-        float(safety_radius) ** 2,
-        np.asarray(lo, dtype=np.float64),
-        np.asarray(hi, dtype=np.float64),
+        np.ascontiguousarray(radii, dtype=np.float64).reshape(E, n),
+        np.ascontiguousarray(lo, dtype=np.float64).reshape(E, n, 2),
+        np.ascontiguousarray(hi, dtype=np.float64).reshape(E, n, 2),
         *outputs,
     )
     return outputs

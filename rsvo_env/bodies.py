@@ -1,0 +1,85 @@
+"""Each agent's own size and input limits, as the filter sees them: flat arrays over E x N
+agents (agent ``e * N + i`` is agent i of env e, as in the pair lists).
+
+A pair is safe at distance ``r_i + r_j`` (its body radii); a scalar ``safety_radius`` keeps its
+meaning, the pair distance of identical agents (each a body of radius ``safety_radius / 2``).
+Each agent's QP has its own box ``lo_i <= u <= hi_i``; ``u_max`` per agent is the box
+``[-u_max_i, u_max_i]`` in each component.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rsvo_env.validation import real_array
+
+if TYPE_CHECKING:
+    from rsvo_env.filter_config import FilterConfig
+
+
+def check_per_agent(values: ArrayLike, name: str, lead: tuple[int, ...]) -> NDArray[np.float64]:
+    """One finite number > 0 per agent, shape ``lead`` ((N,) or (E, N)); the error names the
+    field, the env (when batched), the agent and the value."""
+    arr = real_array(values, name)
+    if arr.shape != lead:
+        raise ValueError(f"{name} has shape {arr.shape}, expected {lead} (one per agent)")
+    bad = ~np.isfinite(arr) | (arr <= 0)
+    if bad.any():
+        idx = tuple(int(k) for k in np.argwhere(bad)[0])
+        env = f"env {idx[0]}, " if len(idx) == 2 else ""
+        where = "".join(f"[{k}]" for k in idx)
+        raise ValueError(
+            f"{name}{where} = {float(arr[idx])!r} must be a finite number > 0 "
+            f"({env}agent {idx[-1]})"
+        )
+    return arr
+
+
+@dataclass(frozen=True)
+class Bodies:
+    """Body radii (M,), input boxes ``lo``, ``hi`` (M, 2) and each env's largest radius (E,)
+    for M = E * N agents; ``uniform``: every agent has the config's radius and box."""
+
+    radii: NDArray[np.float64]
+    lo: NDArray[np.float64]
+    hi: NDArray[np.float64]
+    r_max: NDArray[np.float64]
+    uniform: bool
+
+    @classmethod
+    def of(
+        cls,
+        cfg: FilterConfig,
+        E: int,
+        n: int,
+        radii: NDArray | None = None,
+        u_max: NDArray | None = None,
+    ) -> Bodies:
+        """The bodies of E envs x N agents: ``radii`` and ``u_max`` (E, N) already checked, or
+        None for the config's (``safety_radius / 2``, the box ``cfg.lo``, ``cfg.hi``)."""
+        M = E * n
+        if radii is None:
+            r = np.full(M, 0.5 * cfg.safety_radius)
+        else:
+            r = np.ascontiguousarray(radii, dtype=np.float64).reshape(M)
+        if u_max is None:
+            lo, hi = np.broadcast_to(cfg.lo, (M, 2)), np.broadcast_to(cfg.hi, (M, 2))
+        else:
+            hi = np.repeat(np.asarray(u_max, dtype=np.float64).reshape(M, 1), 2, axis=1)
+            lo = -hi
+        r_max = r.reshape(E, n).max(axis=1) if n else np.zeros(E)
+        return cls(r, lo, hi, r_max, radii is None and u_max is None)
+
+    @property
+    def speed(self) -> NDArray[np.float64]:
+        """(M,) each agent's largest input vector ``|max(|lo|, |hi|)|`` (the box's far corner)."""
+        c = np.maximum(np.abs(self.lo), np.abs(self.hi))
+        return np.hypot(c[:, 0], c[:, 1])
+
+    def pair_distance(self, I: NDArray, J: NDArray) -> NDArray[np.float64]:
+        """(P,) the safe distance ``r_i + r_j`` of the pairs (I, J)."""
+        return self.radii[I] + self.radii[J]
