@@ -11,6 +11,7 @@ from typing import Any
 
 from rsvo_env import registration  # noqa: E402,F401  (registers the ids on import)
 from rsvo_env.env import RSVOParallelEnv
+from rsvo_env.obstacles import Obstacles
 from rsvo_env.responsibility import r_svo, responsibility_weight, weight_matrix
 from rsvo_env.safety import FilterConfig, FilterResult, SafetyFilter
 from rsvo_env.scenarios import SCENARIOS, make_scenario
@@ -35,6 +36,7 @@ __all__ = [
     "SCENARIOS",
     "FilterConfig",
     "FilterResult",
+    "Obstacles",
     "RSVOParallelEnv",
     "SafetyFilter",
     "env",

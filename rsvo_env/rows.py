@@ -166,3 +166,62 @@ def finish(
         n_pairs=len(I),
         n_culled=2 * int(exists.sum()) - len(b),
     )
+
+
+@njit(cache=True)
+def _interleave(off1, A1, b1, h1, nb1, un1, cp1, off2, A2, b2, h2, nb2):
+    """Agent by agent: its rows of set 1, then those of set 2 (no flags)."""
+    n = off1.shape[0] - 1
+    offsets = off1 + off2
+    R = offsets[n]
+    A = np.empty((R, 2))
+    b = np.empty(R)
+    hh = np.empty(R)
+    nb = np.empty(R, dtype=np.int64)
+    un = np.zeros(R, dtype=np.bool_)
+    cp = np.zeros(R, dtype=np.bool_)
+    for i in range(n):
+        k = offsets[i]
+        for src in range(off1[i], off1[i + 1]):
+            A[k, 0], A[k, 1], b[k], hh[k], nb[k] = (
+                A1[src, 0],
+                A1[src, 1],
+                b1[src],
+                h1[src],
+                nb1[src],
+            )
+            un[k], cp[k] = un1[src], cp1[src]
+            k += 1
+        for src in range(off2[i], off2[i + 1]):
+            A[k, 0], A[k, 1], b[k], hh[k], nb[k] = (
+                A2[src, 0],
+                A2[src, 1],
+                b2[src],
+                h2[src],
+                nb2[src],
+            )
+            k += 1
+    return offsets, A, b, hh, nb, un, cp
+
+
+def with_obstacles(
+    rows: Rows, offsets: NDArray, A: NDArray, b: NDArray, h: NDArray, obstacle: NDArray
+) -> Rows:
+    """``rows`` with each agent's obstacle rows after its pair rows; an obstacle row's
+    ``neighbor`` is ``-1 - o`` for obstacle o (agents are >= 0)."""
+    off, A_, b_, hh, nb, un, cp = _interleave(
+        rows.offsets, rows.flat_A, rows.flat_b, rows.flat_h, rows.flat_neighbor,
+        rows.flat_unrecoverable, rows.flat_capped, offsets, A, b, h, -1 - obstacle,
+    )  # fmt: skip
+    return Rows(
+        flat_A=A_,
+        flat_b=b_,
+        offsets=off,
+        flat_neighbor=nb,
+        flat_h=hh,
+        pair_h=rows.pair_h,
+        flat_unrecoverable=un,
+        flat_capped=cp,
+        n_pairs=rows.n_pairs,
+        n_culled=rows.n_culled,
+    )

@@ -21,6 +21,7 @@ from rsvo_env.bodies import Bodies, check_per_agent
 from rsvo_env.filter_config import FilterConfig
 from rsvo_env.filter_result import FilterResult, per_env
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_distance
+from rsvo_env.obstacles import Obstacles
 from rsvo_env.planar import norm
 from rsvo_env.responsibility import (
     min_pair_weight,
@@ -31,6 +32,7 @@ from rsvo_env.responsibility import (
     validate_weight_matrix,
     weight_matrix,
 )
+from rsvo_env.rows import with_obstacles
 from rsvo_env.solvers import dense as dense_solver
 from rsvo_env.validation import check_theta, check_vectors, real_array
 
@@ -114,6 +116,7 @@ class SafetyFilter:
         omega: ArrayLike | None = None,
         radii: ArrayLike | None = None,
         u_max: ArrayLike | None = None,
+        obstacles: Obstacles | None = None,
     ) -> FilterResult:
         """Safe actions (paper, eq. ``qp`` per agent) for one scene or a batch of scenes.
 
@@ -122,8 +125,9 @@ class SafetyFilter:
         replaces the configured weighting (validated on every call); radii: optional body
         radii, (N,) or (E, N), a pair safe at ``r_i + r_j`` (default: ``safety_radius / 2``
         each); u_max: optional per-agent input bound, (N,) or (E, N), the box
-        ``[-u_max_i, u_max_i]`` per component (default: the config's box). Bad input raises
-        ``ValueError`` naming field, agent and value.
+        ``[-u_max_i, u_max_i]`` per component (default: the config's box); obstacles: static
+        circles and walls (:class:`rsvo_env.obstacles.Obstacles`), one row each, weight 1. Bad
+        input raises ``ValueError`` naming field, agent and value.
         """
         cfg = self.config
         pos = check_vectors(positions, "positions", lead=None)
@@ -154,12 +158,24 @@ class SafetyFilter:
             if velocities is None:
                 raise ValueError(f"velocities are required for the {cfg.dynamics}")
             vel = check_vectors(velocities, "velocities", n, lead=lead)
+        caps = None
+        if obstacles is not None:
+            if not isinstance(obstacles, Obstacles):
+                raise ValueError(
+                    f"obstacles = {obstacles!r}: pass an Obstacles (Obstacles.of(circles=, "
+                    "walls=, thickness=))"
+                )
+            caps = obstacles.capsules
+            if caps.ndim == 3 and (single or caps.shape[0] != lead[0]):
+                raise ValueError(
+                    f"obstacles has capsules of shape {caps.shape}: one set (O, 5) for every "
+                    f"scene, or one an env ({lead[0] if lead else 1}, O, 5)"
+                )
+        kw = {"with_rows": True, "bodies": bodies, "obstacles": caps}
         if single:
             vel = None if vel is None else vel[None]
-            return self.apply(
-                pos[None], nom[None], th[None], vel, W, with_rows=True, bodies=bodies
-            ).squeeze()
-        return self.apply(pos, nom, th, vel, W, with_rows=True, bodies=bodies)
+            return self.apply(pos[None], nom[None], th[None], vel, W, **kw).squeeze()
+        return self.apply(pos, nom, th, vel, W, **kw)
 
     def _bodies(
         self, lead: tuple[int, ...], n: int, radii: ArrayLike | None, u_max: ArrayLike | None
@@ -197,6 +213,7 @@ class SafetyFilter:
         floor: pairs.Floor | None = None,
         weighting: Sequence[str] | None = None,
         bodies: Bodies | None = None,
+        obstacles: NDArray | None = None,
     ) -> FilterResult:
         """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
 
@@ -208,14 +225,18 @@ class SafetyFilter:
         weights, which the large-N path needs. There, each agent examines its neighbours within
         its own radius (:func:`pairs.agent_radii`, :func:`pairs.double_integrator_radii` from
         the current velocities): exact culling, so the rows kept, and the solution, are those
-        of all pairs. ``bodies``: each agent's radius and box (None: the config's).
+        of all pairs. ``bodies``: each agent's radius and box (None: the config's);
+        ``obstacles``: capsules (O, 5) or (E, O, 5) (:class:`rsvo_env.obstacles.Obstacles`).
         """
         cfg = self.config
         E, n = theta.shape
         if bodies is None:
             bodies = Bodies.of(cfg, E, n)
+        if obstacles is not None and len(obstacles) == 0:
+            obstacles = None
         dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
-        if dense and not with_rows and cfg.solver == "exact" and cfg.model.dense_kernel:
+        fast = not with_rows and obstacles is None and cfg.model.dense_kernel
+        if dense and fast and cfg.solver == "exact":
             return self._apply_dense(positions, nominal, theta, omega, bodies)
         pos = positions.reshape(E * n, 2)
         reach = None
@@ -234,6 +255,11 @@ class SafetyFilter:
         weights = self.pair_weights(theta, omega, I, J, weighting)
         vel = None if velocities is None else velocities.reshape(E * n, 2)
         rows = cfg.model.rows(cfg, pos, vel, weights, I, J, bodies)
+        obstacle_h = None
+        if obstacles is not None:
+            caps = obstacles[None] if obstacles.ndim == 2 else obstacles
+            *obstacle_rows, obstacle_h = cfg.model.obstacle_rows(cfg, pos, vel, bodies, caps, n)
+            rows = with_obstacles(rows, *obstacle_rows)
         nom = nominal.reshape(E * n, 2)
         actions, feasible, active, violation = solvers.solve(
             cfg.solver, nom, rows.flat_A, rows.flat_b, rows.offsets, bodies.lo, bodies.hi
@@ -244,7 +270,7 @@ class SafetyFilter:
             feasible=feasible.reshape(E, n),
             intervention=norm(actions - nom).reshape(E, n),
             active=active.reshape(E, n),
-            min_h=self._min_h(rows, positions, I, dense, bodies, nearest, reach),
+            min_h=self._min_h(rows, positions, I, dense, bodies, nearest, reach, obstacle_h),
             max_violation=violation.reshape(E, n),
             n_rows=rows.counts.reshape(E, n),
             n_unrecoverable_pairs=per_env(env_of_row, rows.flat_unrecoverable, E) // 2,
@@ -305,12 +331,18 @@ class SafetyFilter:
         bodies: Bodies,
         nearest: NDArray | None = None,
         reach: NDArray | None = None,
+        obstacle_h: NDArray | None = None,
     ) -> NDArray[np.float64]:
         """(E,) smallest barrier value of each scene over the pairs examined; for the single
         integrator beyond the dense size, over all pairs (the nearest pair may lie outside the
         pair search). ``reach`` (E,): the smallest positive search radius of each scene; every
-        pair closer than it was examined, so a closer examined pair is the scene's nearest."""
+        pair closer than it was examined, so a closer examined pair is the scene's nearest.
+        ``obstacle_h`` (E * N,): each agent's smallest barrier value against the obstacles,
+        which the scene's value also covers."""
         E, n = positions.shape[:2]
+        if obstacle_h is not None:
+            h = self._min_h(rows, positions, I, dense, bodies, nearest, reach)
+            return np.minimum(h, obstacle_h.reshape(E, n).min(axis=-1))
         if dense:
             if n < 2:
                 return np.full(E, np.inf)

@@ -59,6 +59,19 @@ class Dynamics:
         """Every agent's barrier rows for the pairs (I, J), flat agent indices."""
         raise NotImplementedError
 
+    def obstacle_rows(
+        self,
+        cfg: FilterConfig,
+        positions: NDArray,
+        velocities: NDArray | None,
+        bodies: Bodies,
+        capsules: NDArray,
+        n: int,
+    ) -> tuple[NDArray, ...]:
+        """Every agent's rows against the static obstacles (``rsvo_env.obstacles``), weight 1:
+        offsets, A, b, h, obstacle of each row, and each agent's smallest h over them."""
+        raise ValueError(f"obstacles are not available for the {self.name} yet")
+
     def culling_radii(
         self, cfg: FilterConfig, omega_floor: NDArray, velocities: NDArray | None, bodies: Bodies
     ) -> NDArray[np.float64]:

@@ -50,6 +50,13 @@ class SingleIntegrator(Dynamics):
             positions, weights, I, J, cfg.gamma, bodies.radii, bodies.lo, bodies.hi
         )
 
+    def obstacle_rows(self, cfg, positions, velocities, bodies, capsules, n):
+        from rsvo_env.obstacles import single_integrator_obstacle_rows
+
+        return single_integrator_obstacle_rows(
+            positions, bodies.radii, capsules, n, float(cfg.gamma), bodies.lo, bodies.hi, True
+        )
+
     def culling_radii(self, cfg, omega_floor, velocities, bodies):
         from rsvo_env import pairs
 

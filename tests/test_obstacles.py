@@ -1,0 +1,151 @@
+"""Static obstacles (circles and walls) in the filter: crowds driven straight through random
+fields never let a body touch an obstacle or another body, in millimetres as in kilometres;
+culling the obstacle rows changes no action; the reference solver agrees; bad obstacles are
+refused by name."""
+
+import numpy as np
+import pytest
+
+from rsvo_env import pairs, solvers
+from rsvo_env.bodies import Bodies
+from rsvo_env.obstacles import Obstacles, single_integrator_obstacle_rows
+from rsvo_env.rows import with_obstacles
+from rsvo_env.safety import FilterConfig, SafetyFilter
+
+
+def field(seed: int, n: int, scale: float = 1.0):
+    """A 40 x 40 field: 12 circles (r 0.5-2) and 6 walls (length 3-8, thickness 0.1-0.4) in the
+    middle band; n agents of radius 0.2-0.6 start on the left, goals on the right (every path
+    crosses the band)."""
+    rng = np.random.default_rng(seed)
+    circles = np.c_[rng.uniform(12, 28, (12, 2)) * [1, 1], rng.uniform(0.5, 2.0, 12)]
+    mid = rng.uniform(12, 28, (6, 2))
+    ang = rng.uniform(0, np.pi, 6)
+    half = rng.uniform(1.5, 4.0, 6)[:, None] * np.c_[np.cos(ang), np.sin(ang)]
+    walls = np.stack([mid - half, mid + half], axis=1)
+    thickness = rng.uniform(0.1, 0.4, 6)
+    radii = rng.uniform(0.2, 0.6, n)
+    ys = np.linspace(1, 39, n)
+    starts = np.c_[1.0 + 3.0 * (np.arange(n) % 3), ys]  # three columns: no overlap at n <= 90
+    goals = np.c_[np.full(n, 38.0), ys[rng.permutation(n)]]
+    obstacles = Obstacles.of(circles * scale, walls * scale, thickness * scale)
+    return obstacles, starts * scale, goals * scale, radii * scale
+
+
+def straight_nominal(x, goals, u):
+    d = goals - x
+    dist = np.linalg.norm(d, axis=1, keepdims=True)
+    return d / np.maximum(dist, 1e-300) * np.minimum(dist, u)
+
+
+def body_gap(x, radii):
+    I, J = pairs.all_pairs(len(x))
+    return float((np.linalg.norm(x[I] - x[J], axis=1) - radii[I] - radii[J]).min())
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
+@pytest.mark.parametrize("seed,n", [(0, 20), (1, 40), (2, 90)])
+def test_no_body_penetrates_an_obstacle_or_another_body(seed, n, scale):
+    obstacles, x, goals, radii = field(seed, n, scale)
+    assert (obstacles.clearance(x, radii) > 0).all() and body_gap(x, radii) > 0
+    dt, u = 0.05, 2.0 * scale
+    flt = SafetyFilter(FilterConfig(gamma=10.0, u_max=u, dt=dt))
+    theta = np.random.default_rng(seed).uniform(0, 5, n)
+    closest = np.inf
+    for _ in range(300):
+        res = flt.filter(x, straight_nominal(x, goals, u), theta, radii=radii, obstacles=obstacles)
+        assert res.feasible.all(), "a QP was infeasible in the safe set"
+        x = x + dt * res.actions
+        clear = obstacles.clearance(x, radii)
+        closest = min(closest, float(clear.min()) / scale)
+        assert (clear >= -1e-9 * radii).all(), "a body entered an obstacle"
+        assert body_gap(x, radii) >= -1e-9 * 2 * radii.max()
+    assert closest < 0.05, "the crowd never reached an obstacle: the test tested nothing"
+
+
+def test_culling_the_obstacle_rows_changes_no_action():
+    obstacles, x, goals, radii = field(3, 40)
+    cfg = FilterConfig(gamma=10.0, u_max=2.0, dt=0.05)
+    flt = SafetyFilter(cfg)
+    theta = np.ones(40)
+    for _ in range(120):
+        nominal = straight_nominal(x, goals, 2.0)
+        res = flt.filter(x, nominal, theta, radii=radii, obstacles=obstacles)
+        bodies = Bodies.of(cfg, 1, 40, radii[None])
+        I, J = pairs.all_pairs(40)
+        rows = cfg.model.rows(cfg, x, None, flt.pair_weights(theta, None, I, J), I, J, bodies)
+        full = single_integrator_obstacle_rows(
+            x, bodies.radii, obstacles.capsules[None], 40, 10.0, bodies.lo, bodies.hi, False
+        )
+        rows = with_obstacles(rows, *full[:5])
+        ref = solvers.solve("exact", nominal, rows.flat_A, rows.flat_b, rows.offsets, bodies.lo,
+                            bodies.hi)[0]  # fmt: skip
+        np.testing.assert_array_equal(res.actions, ref)
+        x = x + 0.05 * res.actions
+    assert (res.rows.flat_neighbor < 0).any(), "no obstacle row ever bound"
+
+
+def test_reference_solver_agrees_with_obstacles():
+    obstacles, x, goals, radii = field(4, 20)
+    exact = SafetyFilter(FilterConfig(gamma=10.0, u_max=2.0, dt=0.05))
+    ref = SafetyFilter(FilterConfig(gamma=10.0, u_max=2.0, dt=0.05, solver="clarabel"))
+    for _ in range(150):
+        nominal = straight_nominal(x, goals, 2.0)
+        a = exact.filter(x, nominal, np.ones(20), radii=radii, obstacles=obstacles)
+        b = ref.filter(x, nominal, np.ones(20), radii=radii, obstacles=obstacles)
+        np.testing.assert_allclose(a.actions, b.actions, atol=2e-6)
+        x = x + 0.05 * a.actions
+
+
+def test_an_agent_stops_at_a_wall_and_a_circle():
+    obstacles = Obstacles.of(circles=[(0.0, 0.0, 1.0)], walls=[((2.0, -1.0), (2.0, 1.0))],
+                             thickness=0.2)  # fmt: skip
+    flt = SafetyFilter(FilterConfig(gamma=10.0, dt=0.05))
+    x = np.array([[-3.0, 0.0], [5.0, 0.0]])
+    for _ in range(200):
+        res = flt.filter(x, np.array([[2.0, 0.0], [-2.0, 0.0]]), np.ones(2), obstacles=obstacles)
+        x = x + 0.05 * res.actions
+    # body radius 1/2 (safety_radius 1): against the circle's 1 and the wall's half thickness
+    np.testing.assert_allclose(x, [[-1.5, 0.0], [2.6, 0.0]], atol=1e-6)
+    assert res.min_h == pytest.approx(0.0, abs=1e-9)
+    assert set(res.rows.flat_neighbor) == {-1, -2}  # obstacle o is neighbour -1 - o
+
+
+def test_obstacles_per_env_in_a_batch():
+    one = Obstacles.of(circles=[(0.0, 0.0, 1.0)])
+    two = Obstacles.of(circles=[(10.0, 0.0, 1.0)])
+    both = Obstacles(np.stack([one.capsules, two.capsules]))
+    x = np.array([[[-3.0, 0.0]], [[7.0, 0.0]]])
+    flt = SafetyFilter(FilterConfig(gamma=10.0, dt=0.05))
+    for _ in range(200):
+        x = x + 0.05 * flt.filter(x, np.full((2, 1, 2), [2.0, 0.0]), np.ones((2, 1)),
+                                  obstacles=both).actions  # fmt: skip
+    np.testing.assert_allclose(x[:, 0, 0], [-1.5, 8.5], atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    "kwargs,match",
+    [
+        ({"circles": [(0.0, 0.0, -1.0)]}, r"circles\[0\] has radius -1.0"),
+        ({"circles": [(0.0, np.nan, 1.0)]}, r"circles\[0\] = \[0.0, nan, 1.0\] is not finite"),
+        ({"circles": [(0.0, 1.0)]}, r"each entry is \(x, y, r\)"),
+        ({"circles": [("a", 0, 1)]}, r"circles must be real numbers"),
+        ({"walls": [((0, 0), (1, 1))], "thickness": -0.1}, r"thickness\[0\] = -0.1 .*wall 0"),
+        ({"walls": [((0, 0), (1, 1))], "thickness": [0.1, 0.2]}, r"one per wall"),
+        ({"walls": [((0, 0), (1, np.inf))]}, r"walls\[0\] .* is not finite"),
+    ],
+)
+def test_bad_obstacles_are_refused_by_name(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        Obstacles.of(**kwargs)
+
+
+def test_obstacles_refused_where_not_supported():
+    flt = SafetyFilter(FilterConfig())
+    x = np.array([[0.0, 0.0], [5.0, 0.0]])
+    with pytest.raises(ValueError, match="pass an Obstacles"):
+        flt.filter(x, np.zeros((2, 2)), np.ones(2), obstacles=[(0, 0, 1)])
+    di = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=2.0))
+    with pytest.raises(ValueError, match="obstacles are not available for the double_integrator"):
+        di.filter(x, np.zeros((2, 2)), np.ones(2), np.zeros((2, 2)),
+                  obstacles=Obstacles.of(circles=[(2.0, 2.0, 0.5)]))  # fmt: skip
