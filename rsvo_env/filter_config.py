@@ -53,6 +53,8 @@ class FilterConfig:
     split: str = "capability"
     gamma2: float | None = None
     neighbor_radius: float | None = None
+    lookahead: float | None = None
+    w_max: float | None = None
     model: models.Dynamics = field(init=False, repr=False, compare=False)
     lo: NDArray[np.float64] = field(init=False, repr=False, compare=False)
     hi: NDArray[np.float64] = field(init=False, repr=False, compare=False)
@@ -88,6 +90,9 @@ class FilterConfig:
                 )
         if self.neighbor_radius is not None:
             positive("neighbor_radius", self.neighbor_radius)
+        for name in ("lookahead", "w_max"):
+            if getattr(self, name) is not None:
+                positive(name, getattr(self, name))
         hi = _box_bound(self.u_max, "u_max")
         lo = -hi if self.u_min is None else _box_bound(self.u_min, "u_min")
         if not (np.isfinite(lo).all() and np.isfinite(hi).all()) or not (lo < hi).all():
@@ -96,6 +101,7 @@ class FilterConfig:
                 f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
             )
         model.check_box(self, lo, hi)
+        lo, hi = model.box(self, lo, hi)
         object.__setattr__(self, "lo", lo)
         object.__setattr__(self, "hi", hi)
         if not callable(self.weighting) and self.weighting not in WEIGHTING_MODES:

@@ -12,13 +12,16 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env import barriers, pairs, solvers
-from rsvo_env.bodies import Bodies, check_per_agent
+from rsvo_env.bodies import Bodies
+from rsvo_env.dynamics.unicycle import rotate_rows
 from rsvo_env.filter_config import FilterConfig
+from rsvo_env.filter_inputs import check_bodies, check_headings, check_obstacles
 from rsvo_env.filter_result import FilterResult, per_env
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_distance
 from rsvo_env.obstacles import Obstacles
@@ -117,6 +120,7 @@ class SafetyFilter:
         radii: ArrayLike | None = None,
         u_max: ArrayLike | None = None,
         obstacles: Obstacles | None = None,
+        headings: ArrayLike | None = None,
     ) -> FilterResult:
         """Safe actions (paper, eq. ``qp`` per agent) for one scene or a batch of scenes.
 
@@ -126,8 +130,10 @@ class SafetyFilter:
         radii, (N,) or (E, N), a pair safe at ``r_i + r_j`` (default: ``safety_radius / 2``
         each); u_max: optional per-agent input bound, (N,) or (E, N), the box
         ``[-u_max_i, u_max_i]`` per component (default: the config's box); obstacles: static
-        circles and walls (:class:`rsvo_env.obstacles.Obstacles`), one row each, weight 1. Bad
-        input raises ``ValueError`` naming field, agent and value.
+        circles and walls (:class:`rsvo_env.obstacles.Obstacles`), one row each, weight 1;
+        headings: (N,) or (E, N) radians, for the unicycle (nominal and actions are then
+        (v, w), ``docs/unicycle.md``). Bad input raises ``ValueError`` naming field, agent and
+        value.
         """
         cfg = self.config
         pos = check_vectors(positions, "positions", lead=None)
@@ -152,53 +158,22 @@ class SafetyFilter:
             if W_in.shape != (*lead, n, n):
                 raise ValueError(f"omega has shape {W_in.shape}, expected {(*lead, n, n)}")
             W = np.stack([validate_weight_matrix(w, n) for w in W_in.reshape(-1, n, n)])
-        bodies = self._bodies(lead, n, radii, u_max)
+        bodies = check_bodies(cfg, lead, n, radii, u_max)
         vel = None
         if cfg.model.needs_velocities:
             if velocities is None:
                 raise ValueError(f"velocities are required for the {cfg.dynamics}")
             vel = check_vectors(velocities, "velocities", n, lead=lead)
-        caps = None
-        if obstacles is not None:
-            if not isinstance(obstacles, Obstacles):
-                raise ValueError(
-                    f"obstacles = {obstacles!r}: pass an Obstacles (Obstacles.of(circles=, "
-                    "walls=, thickness=))"
-                )
-            caps = obstacles.capsules
-            if caps.ndim == 3 and (single or caps.shape[0] != lead[0]):
-                raise ValueError(
-                    f"obstacles has capsules of shape {caps.shape}: one set (O, 5) for every "
-                    f"scene, or one an env ({lead[0] if lead else 1}, O, 5)"
-                )
-        kw = {"with_rows": True, "bodies": bodies, "obstacles": caps}
+        caps = check_obstacles(obstacles, lead)
+        hd = None
+        if cfg.model.needs_headings:
+            hd = check_headings(headings, (*lead, n), cfg.dynamics)
+            hd = hd[None] if single else hd
+        kw = {"with_rows": True, "bodies": bodies, "obstacles": caps, "headings": hd}
         if single:
             vel = None if vel is None else vel[None]
             return self.apply(pos[None], nom[None], th[None], vel, W, **kw).squeeze()
         return self.apply(pos, nom, th, vel, W, **kw)
-
-    def _bodies(
-        self, lead: tuple[int, ...], n: int, radii: ArrayLike | None, u_max: ArrayLike | None
-    ) -> Bodies | None:
-        """The checked per-agent radii and limits of :meth:`filter` (None: the config's)."""
-        if radii is None and u_max is None:
-            return None
-        cfg = self.config
-        if not cfg.model.per_agent_bodies:
-            raise ValueError(
-                f"radii and u_max per agent are not available for the {cfg.dynamics}: it takes "
-                "one safety_radius and one box (FilterConfig)"
-            )
-        if u_max is not None and cfg.u_min is not None:
-            raise ValueError(
-                "u_max per agent gives each agent the box [-u_max_i, u_max_i]; it cannot be "
-                f"combined with FilterConfig.u_min = {cfg.u_min!r}"
-            )
-        shape = (*lead, n)
-        r = None if radii is None else check_per_agent(radii, "radii", shape)
-        u = None if u_max is None else check_per_agent(u_max, "u_max", shape)
-        E = lead[0] if lead else 1
-        return Bodies.of(cfg, E, n, r, u)
 
     def apply(
         self,
@@ -214,6 +189,7 @@ class SafetyFilter:
         weighting: Sequence[str] | None = None,
         bodies: Bodies | None = None,
         obstacles: NDArray | None = None,
+        headings: NDArray | None = None,
     ) -> FilterResult:
         """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
 
@@ -226,7 +202,8 @@ class SafetyFilter:
         its own radius (:func:`pairs.agent_radii`, :func:`pairs.double_integrator_radii` from
         the current velocities): exact culling, so the rows kept, and the solution, are those
         of all pairs. ``bodies``: each agent's radius and box (None: the config's);
-        ``obstacles``: capsules (O, 5) or (E, O, 5) (:class:`rsvo_env.obstacles.Obstacles`).
+        ``obstacles``: capsules (O, 5) or (E, O, 5) (:class:`rsvo_env.obstacles.Obstacles`);
+        ``headings`` (E, N): for a model that needs them (the unicycle).
         """
         cfg = self.config
         E, n = theta.shape
@@ -238,6 +215,13 @@ class SafetyFilter:
         fast = not with_rows and obstacles is None and cfg.model.dense_kernel
         if dense and fast and cfg.solver == "exact":
             return self._apply_dense(positions, nominal, theta, omega, bodies)
+        solve_nominal, solve_box, rotation = nominal, bodies, None
+        if cfg.model.needs_headings:
+            # the rows live on points of the model's own (the unicycle's look-ahead points)
+            positions, solve_nominal, bodies, rotation = cfg.model.lift(
+                cfg, positions, headings, nominal, bodies
+            )
+            nearest = None
         pos = positions.reshape(E * n, 2)
         reach = None
         if dense:
@@ -260,10 +244,14 @@ class SafetyFilter:
             caps = obstacles[None] if obstacles.ndim == 2 else obstacles
             *obstacle_rows, obstacle_h = cfg.model.obstacle_rows(cfg, pos, vel, bodies, caps, n)
             rows = with_obstacles(rows, *obstacle_rows)
-        nom = nominal.reshape(E * n, 2)
+        if rotation is not None:
+            rows = replace(rows, flat_A=rotate_rows(rows.flat_A, rows.owner, rotation))
         actions, feasible, active, violation = solvers.solve(
-            cfg.solver, nom, rows.flat_A, rows.flat_b, rows.offsets, bodies.lo, bodies.hi
-        )
+            cfg.solver, solve_nominal.reshape(E * n, 2), rows.flat_A, rows.flat_b, rows.offsets,
+            solve_box.lo, solve_box.hi,
+        )  # fmt: skip
+        actions = cfg.model.lower(cfg, actions)
+        nom = nominal.reshape(E * n, 2)
         env_of_row = rows.owner // n
         return FilterResult(
             actions=actions.reshape(E, n, 2),

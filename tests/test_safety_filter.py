@@ -177,7 +177,7 @@ def test_double_integrator_needs_velocities():
         ({"safety_radius": -2.0}, r"safety_radius = -2.0"),
         ({"u_max": 1.0, "u_min": 1.0}, r"u_min = \[1.0, 1.0\], u_max = \[1.0, 1.0\]"),
         ({"u_max": np.inf}, r"u_max = \[inf, inf\]"),
-        ({"dynamics": "unicycle"}, r"dynamics = 'unicycle'"),
+        ({"dynamics": "bicycle"}, r"dynamics = 'bicycle'"),
         ({"weighting": "selfish"}, r"weighting = 'selfish'"),
         ({"split": "half"}, r"split = 'half'"),
         ({"barrier": "exp"}, r"barrier = 'exp'"),

@@ -34,8 +34,11 @@ class Dynamics:
     # whether one radius from the smallest weight alone bounds every binding pair
     # (:meth:`search_radius`); else the state decides it (:meth:`culling_radii`)
     radius_from_weights: ClassVar[bool] = False
-    # whether its agents may each have their own body radius and input box (rsvo_env.bodies)
+    # whether its agents may each have their own body radius (rsvo_env.bodies), and box
     per_agent_bodies: ClassVar[bool] = False
+    per_agent_limits: ClassVar[bool] = True
+    # whether its state has a heading the filter needs (``SafetyFilter.filter(headings=)``)
+    needs_headings: ClassVar[bool] = False
 
     def step(
         self, positions: NDArray, velocities: NDArray, u: NDArray, dt: float
@@ -45,6 +48,29 @@ class Dynamics:
 
     def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
         """Refuse an input box under which this model's guarantee does not hold."""
+
+    def box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> tuple[NDArray, NDArray]:
+        """The box of the filter's QP from the configured bounds (the same, unless the model
+        solves in coordinates of its own)."""
+        return lo, hi
+
+    def lift(
+        self,
+        cfg: FilterConfig,
+        positions: NDArray,
+        headings: NDArray,
+        nominal: NDArray,
+        bodies: Bodies,
+    ) -> tuple[NDArray, NDArray, Bodies, NDArray]:
+        """For a model whose QP lives in coordinates of its own (``needs_headings``): the
+        points the rows are built on, the nominal in the QP's coordinates, the bodies the rows
+        and culling use, and each agent's (cos, sin) that turns its rows into those
+        coordinates."""
+        raise NotImplementedError
+
+    def lower(self, cfg: FilterConfig, actions: NDArray) -> NDArray:
+        """The QP's solution back in the model's inputs (inverse of :meth:`lift`'s nominal)."""
+        return actions
 
     def rows(
         self,

@@ -1,0 +1,144 @@
+"""The unicycle (differential drive): axle position p, heading theta, inputs forward speed v in
+[v_min, v_max] and turn rate w in [-w_max, w_max] (``docs/unicycle.md``).
+
+The filter acts on the look-ahead point ``q = p + l e(theta)`` (the near-identity map of the
+Robotarium): ``q' = R(theta) (v, l w)``, so in the agent's body frame the look-ahead point is a
+single integrator with input ``c_b = (v, l w)``. Its rows are the single integrator's on q with
+each body's radius enlarged by l (``|p_i - p_j| >= |q_i - q_j| - l_i - l_j``), rotated into the
+agent's body frame, and its box keeps the inputs in their bounds for the whole step.
+Over a step the look-ahead point's velocity ``c = R(theta_0) c_b`` is held (the near-identity
+map run continuously): ``q+ = q + dt c`` exactly, and the heading relaxes toward c's direction
+in closed form, ``tan(psi / 2)`` decaying as ``exp(-|c| t / l)`` (``psi = theta - angle(c)``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rsvo_env.dynamics.model import Dynamics
+from rsvo_env.dynamics.single_integrator import SingleIntegrator
+
+if TYPE_CHECKING:
+    from rsvo_env.bodies import Bodies
+    from rsvo_env.filter_config import FilterConfig
+
+
+def heading_vectors(headings: NDArray) -> NDArray[np.float64]:
+    """(..., 2) the unit vectors ``(cos theta, sin theta)``."""
+    return np.stack([np.cos(headings), np.sin(headings)], axis=-1)
+
+
+def turn(v: NDArray, cos: NDArray, sin: NDArray) -> NDArray[np.float64]:
+    """Vectors (..., 2) turned by the angles of (cos, sin): body frame to world frame."""
+    return np.stack([cos * v[..., 0] - sin * v[..., 1], sin * v[..., 0] + cos * v[..., 1]], -1)
+
+
+def unicycle_step(
+    positions: NDArray, headings: NDArray, u: NDArray, lookahead: float, dt: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The exact step of the look-ahead hold: ``u`` (..., 2) is (v, w) at the start of the
+    step; the look-ahead point moves by ``dt R(theta) (v, l w)``, the heading relaxes toward
+    that direction (module docstring). Returns axle positions and headings after ``dt``."""
+    l = lookahead
+    e = heading_vectors(headings)
+    c = turn(np.stack([u[..., 0], l * u[..., 1]], -1), e[..., 0], e[..., 1])
+    q = positions + l * e + dt * c
+    speed = np.hypot(c[..., 0], c[..., 1])
+    alpha = np.arctan2(c[..., 1], c[..., 0])
+    psi = np.angle(np.exp(1j * (headings - alpha)))  # in (-pi, pi]
+    # tan(psi / 2) decays as exp(-|c| t / l): psi keeps its sign and never crosses 0 or pi
+    relaxed = alpha + 2.0 * np.arctan(np.tan(0.5 * psi) * np.exp(-speed * dt / l))
+    new = np.where(speed > 0, relaxed, headings)
+    new = np.where(np.abs(psi) == np.pi, headings, new)  # straight back: no turn
+    return q - l * heading_vectors(new), new
+
+
+class Unicycle(Dynamics):
+    """Differential drive through its look-ahead point (``docs/unicycle.md``)."""
+
+    name = "unicycle"
+    limit_name = "u_max"
+    needs_headings = True
+    per_agent_bodies = True
+    per_agent_limits = False
+
+    def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
+        if cfg.lookahead is None or cfg.w_max is None:
+            raise ValueError("FilterConfig: the unicycle needs lookahead (l > 0) and w_max")
+        if not (lo[0] <= 0.0 <= hi[0]):
+            raise ValueError(
+                f"FilterConfig: the unicycle must be able to stop, v_min <= 0 <= v_max "
+                f"(u_min <= 0 <= u_max), got v_min = {lo[0]!r}, v_max = {hi[0]!r}"
+            )
+        if cfg.lookahead * cfg.w_max >= hi[0]:
+            raise ValueError(
+                f"FilterConfig: lookahead * w_max = {cfg.lookahead * cfg.w_max!r} must be below "
+                f"v_max = {hi[0]!r} (the look-ahead point's speed bounds the forward speed)"
+            )
+
+    def box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> tuple[NDArray, NDArray]:
+        # c_b = (v, l w) with v >= 0: the heading turns toward c, so v(t) rises toward |c| and
+        # |w(t)| only falls; |c_b| <= v_max and |l w| <= l w_max then keep every input in its
+        # bounds for the whole step. Reversing (v < 0) could swing w past w_max on the way.
+        b = cfg.lookahead * cfg.w_max
+        v_hi = float(np.sqrt(hi[0] ** 2 - b * b))
+        return np.array([0.0, -b]), np.array([v_hi, b])
+
+    def lift(self, cfg, positions, headings, nominal, bodies):
+        l = float(cfg.lookahead)
+        e = heading_vectors(headings)
+        q = positions + l * e
+        M = len(bodies.radii)
+        cos, sin = e.reshape(M, 2).T
+        nom = nominal.reshape(M, 2)
+        nominal_b = np.stack([nom[:, 0], l * nom[:, 1]], -1)
+        # the world-frame box that holds each agent's rotated box: a valid (wider) box for
+        # culling, since a row that cannot bind over it cannot bind over the rotated one
+        mid, half = 0.5 * (bodies.lo + bodies.hi), 0.5 * (bodies.hi - bodies.lo)
+        centre = np.stack(
+            [cos * mid[:, 0] - sin * mid[:, 1], sin * mid[:, 0] + cos * mid[:, 1]], -1
+        )
+        ac, as_ = np.abs(cos), np.abs(sin)
+        extent = np.stack(
+            [ac * half[:, 0] + as_ * half[:, 1], as_ * half[:, 0] + ac * half[:, 1]], -1
+        )
+        row_bodies = replace(
+            bodies,
+            radii=bodies.radii + l,
+            lo=centre - extent,
+            hi=centre + extent,
+            r_max=bodies.r_max + l,
+            uniform=False,
+        )
+        return q, nominal_b.reshape(nominal.shape), row_bodies, np.stack([cos, sin], -1)
+
+    def lower(self, cfg, actions):
+        return np.stack([actions[..., 0], actions[..., 1] / cfg.lookahead], -1)
+
+    # the rows, radii and obstacle rows are the single integrator's on the look-ahead point
+    rows = SingleIntegrator.rows
+    culling_radii = SingleIntegrator.culling_radii
+    obstacle_rows = SingleIntegrator.obstacle_rows
+    barrier_over_all_pairs = SingleIntegrator.barrier_over_all_pairs
+
+    def step(self, positions, velocities, u, dt):
+        raise NotImplementedError(
+            "the unicycle's state is (positions, headings): use rsvo_env.dynamics.unicycle_step"
+        )
+
+    def reach(self, params: dict[str, Any], limit: float, horizon: float) -> tuple[float, float]:
+        return limit * horizon, limit
+
+
+def rotate_rows(A: NDArray, owner: NDArray, rotation: NDArray) -> NDArray[np.float64]:
+    """Rows ``A . c <= b`` on world velocities as rows on body-frame inputs, ``c = R c_b``:
+    ``A R(theta_owner)``; ``rotation`` (M, 2) each agent's (cos, sin)."""
+    cos, sin = rotation[owner, 0], rotation[owner, 1]
+    return np.stack([A[:, 0] * cos + A[:, 1] * sin, -A[:, 0] * sin + A[:, 1] * cos], -1)
+
+
+__all__ = ["Bodies", "Unicycle", "heading_vectors", "rotate_rows", "unicycle_step"]

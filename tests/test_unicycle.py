@@ -1,0 +1,165 @@
+"""The unicycle through its look-ahead point: bodies (true axle positions) never overlap, the
+inputs stay in their bounds through every step, the closed-form step is the unicycle's own
+motion under the look-ahead hold, and obstacles hold as for the single integrator."""
+
+import numpy as np
+import pytest
+
+from rsvo_env import pairs
+from rsvo_env.dynamics import unicycle_step
+from rsvo_env.dynamics.unicycle import heading_vectors
+from rsvo_env.obstacles import Obstacles
+from rsvo_env.safety import FilterConfig, SafetyFilter
+
+V_MAX, W_MAX = 1.0, 2.0
+
+
+def crowd(n: int, seed: int, scale: float = 1.0):
+    rng = np.random.default_rng(seed)
+    radii = rng.uniform(0.2, 0.5, n)
+    side = int(np.ceil(np.sqrt(n)))
+    grid = np.stack(np.meshgrid(np.arange(side), np.arange(side)), -1).reshape(-1, 2)[:n]
+    x = grid * 1.6 + rng.uniform(-0.1, 0.1, (n, 2))  # look-ahead points apart too
+    headings = rng.uniform(-np.pi, np.pi, n)
+    goals = x[rng.permutation(n)]
+    theta = rng.uniform(0.0, 10.0, n)
+    return x * scale, headings, goals * scale, theta, radii * scale
+
+
+def nominal(p, headings, goals, l, v_max):
+    """Drive the look-ahead point straight at the goal, as (v, w)."""
+    e = heading_vectors(headings)
+    c = goals - (p + l * e)
+    dist = np.linalg.norm(c, axis=1, keepdims=True)
+    c = c / np.maximum(dist, 1e-300) * np.minimum(dist, v_max)
+    along = (e * c).sum(1)
+    across = e[:, 0] * c[:, 1] - e[:, 1] * c[:, 0]
+    return np.c_[along, across / l]
+
+
+def inputs_through_the_step(u, l, dt, k=8):
+    """(v, w) of the look-ahead hold at k instants of the step (they vary within it)."""
+    c = np.hypot(u[:, 0], l * u[:, 1])
+    psi0 = np.arctan2(-l * u[:, 1], u[:, 0])  # heading minus the direction of c
+    t = np.linspace(0, dt, k)[:, None]
+    psi = 2 * np.arctan(np.tan(psi0 / 2) * np.exp(-c * t / l))
+    return c * np.cos(psi), -c / l * np.sin(psi)
+
+
+@pytest.mark.parametrize(
+    "n,steps,l_ratio,scale",
+    [(20, 200, 0.05, 1.0), (20, 200, 0.5, 1e-3), (150, 120, 0.2, 1e3), (150, 120, 0.5, 1.0),
+     (1000, 30, 0.3, 1.0)],
+)  # fmt: skip
+def test_bodies_never_overlap_and_inputs_stay_in_bounds(n, steps, l_ratio, scale):
+    p, th, goals, theta, radii = crowd(n, n, scale)
+    l, dt = l_ratio * 0.2 * scale, 0.05
+    cfg = FilterConfig(dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX * scale,
+                       u_min=0.0, gamma=10.0, dt=dt)  # fmt: skip
+    flt = SafetyFilter(cfg)
+    I, J = pairs.all_pairs(n)
+    worst = np.inf
+    for _ in range(steps):
+        res = flt.filter(p, nominal(p, th, goals, l, V_MAX * scale), theta, headings=th,
+                         radii=radii)  # fmt: skip
+        assert res.feasible.all()
+        v, w = inputs_through_the_step(res.actions, l, dt)
+        tol = 1e-12 * scale
+        assert (v >= -tol).all() and (v <= V_MAX * scale + tol).all()
+        assert (np.abs(w) <= W_MAX * (1 + 1e-12)).all()
+        p, th = unicycle_step(p, th, res.actions, l, dt)
+        gap = np.linalg.norm(p[I] - p[J], axis=1) / (radii[I] + radii[J])
+        worst = min(worst, float(gap.min()))
+    assert worst >= 1.0 - 1e-9
+    assert worst < 1.0 + 2 * l_ratio + 0.3, "the crowd never came close: nothing was tested"
+
+
+def test_the_step_is_the_unicycle_under_the_look_ahead_hold():
+    """RK4 on p' = v e, theta' = w with (v, w) from the hold (q' = c fixed) matches the closed
+    form, and the look-ahead point moves in a straight line."""
+    rng = np.random.default_rng(0)
+    p, th = rng.normal(size=(50, 2)), rng.uniform(-np.pi, np.pi, 50)
+    u = np.c_[rng.uniform(0, 0.9, 50), rng.uniform(-2, 2, 50)]
+    l, dt = 0.15, 0.2
+    e = heading_vectors(th)
+    c = np.stack([e[:, 0] * u[:, 0] - e[:, 1] * l * u[:, 1],
+                  e[:, 1] * u[:, 0] + e[:, 0] * l * u[:, 1]], -1)  # fmt: skip
+
+    def f(state):
+        hp = state[:, 2]
+        eh = heading_vectors(hp)
+        v = (eh * c).sum(1)
+        w = (eh[:, 0] * c[:, 1] - eh[:, 1] * c[:, 0]) / l
+        return np.c_[v[:, None] * eh, w]
+
+    s = np.c_[p, th]
+    h = dt / 2000
+    for _ in range(2000):
+        k1 = f(s)
+        k2 = f(s + h / 2 * k1)
+        k3 = f(s + h / 2 * k2)
+        k4 = f(s + h * k3)
+        s = s + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    p1, th1 = unicycle_step(p, th, u, l, dt)
+    np.testing.assert_allclose(p1, s[:, :2], atol=1e-10)
+    np.testing.assert_allclose(np.angle(np.exp(1j * (th1 - s[:, 2]))), 0, atol=1e-10)
+    np.testing.assert_allclose(p1 + l * heading_vectors(th1), p + l * e + dt * c, atol=1e-12)
+
+
+def test_unicycles_stop_at_obstacles():
+    obstacles = Obstacles.of(circles=[(0.0, 0.0, 1.0)], walls=[((3.0, -2.0), (3.0, 2.0))],
+                             thickness=0.2)  # fmt: skip
+    l = 0.1
+    flt = SafetyFilter(FilterConfig(dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX,
+                                    gamma=10.0, dt=0.05))  # fmt: skip
+    p = np.array([[-4.0, 0.05], [6.0, 0.5]])
+    th = np.array([0.3, np.pi - 0.2])
+    goals = np.array([[4.0, 0.0], [0.0, 0.5]])
+    radii = np.array([0.3, 0.4])
+    for _ in range(400):
+        res = flt.filter(p, nominal(p, th, goals, l, V_MAX), np.ones(2), headings=th,
+                         radii=radii, obstacles=obstacles)  # fmt: skip
+        assert res.feasible.all()
+        p, th = unicycle_step(p, th, res.actions, l, 0.05)
+        assert (obstacles.clearance(p, radii) >= -1e-9).all()
+    # each stopped in front of its obstacle, its look-ahead point at the enlarged distance
+    assert obstacles.clearance(p, radii).max() < 2 * l + 0.05
+
+
+def test_unicycle_config_is_checked():
+    with pytest.raises(ValueError, match="needs lookahead"):
+        FilterConfig(dynamics="unicycle", w_max=1.0)
+    with pytest.raises(ValueError, match="must be able to stop"):
+        FilterConfig(dynamics="unicycle", lookahead=0.1, w_max=1.0, u_min=0.2, u_max=1.0)
+    with pytest.raises(ValueError, match="lookahead \\* w_max"):
+        FilterConfig(dynamics="unicycle", lookahead=0.5, w_max=3.0, u_max=1.0)
+    with pytest.raises(ValueError, match="FilterConfig.lookahead = -0.1"):
+        FilterConfig(dynamics="unicycle", lookahead=-0.1, w_max=1.0)
+    flt = SafetyFilter(FilterConfig(dynamics="unicycle", lookahead=0.1, w_max=1.0))
+    x = np.array([[0.0, 0.0], [5.0, 0.0]])
+    with pytest.raises(ValueError, match="headings are required"):
+        flt.filter(x, np.zeros((2, 2)), np.ones(2))
+    with pytest.raises(ValueError, match=r"headings\[1\] = nan is not finite \(agent 1\)"):
+        flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=[0.0, np.nan])
+    with pytest.raises(ValueError, match=r"headings has shape \(3,\)"):
+        flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(3))
+    with pytest.raises(ValueError, match="u_max per agent is not available for the unicycle"):
+        flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), u_max=np.ones(2))
+
+
+def test_culled_unicycle_filter_equals_all_pairs():
+    p, th, goals, theta, radii = crowd(300, 4)
+    l = 0.06
+    kw = dict(dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX, gamma=10.0, dt=0.05)
+    culled = SafetyFilter(FilterConfig(**kw))
+    every = SafetyFilter(FilterConfig(**kw, neighbor_radius=1e9))  # every pair within 1e9
+    bound = 0
+    for _ in range(15):
+        nom = nominal(p, th, goals, l, V_MAX)
+        a = culled.filter(p, nom, theta, headings=th, radii=radii)
+        b = every.filter(p, nom, theta, headings=th, radii=radii)
+        assert b.rows.n_pairs == 300 * 299 // 2 > a.rows.n_pairs
+        np.testing.assert_allclose(a.actions, b.actions, rtol=0, atol=1e-12 * W_MAX)
+        bound += int(a.active.sum())
+        p, th = unicycle_step(p, th, a.actions, l, 0.05)
+    assert bound > 0
