@@ -49,6 +49,8 @@ class Bodies:
     hi: NDArray[np.float64]
     r_max: NDArray[np.float64]
     uniform: bool
+    # (M,) each agent's largest input vector |max(|lo|, |hi|)| (the box's far corner)
+    speed: NDArray[np.float64]
 
     @classmethod
     def of(
@@ -67,18 +69,26 @@ class Bodies:
         else:
             r = np.ascontiguousarray(radii, dtype=np.float64).reshape(M)
         if u_max is None:
-            lo, hi = np.broadcast_to(cfg.lo, (M, 2)), np.broadcast_to(cfg.hi, (M, 2))
+            lo, hi = np.tile(cfg.lo, (M, 1)), np.tile(cfg.hi, (M, 1))
         else:
             hi = np.repeat(np.asarray(u_max, dtype=np.float64).reshape(M, 1), 2, axis=1)
             lo = -hi
         r_max = r.reshape(E, n).max(axis=1) if n else np.zeros(E)
-        return cls(r, lo, hi, r_max, radii is None and u_max is None)
+        return cls.made(r, lo, hi, r_max, radii is None and u_max is None)
 
-    @property
-    def speed(self) -> NDArray[np.float64]:
-        """(M,) each agent's largest input vector ``|max(|lo|, |hi|)|`` (the box's far corner)."""
-        c = np.maximum(np.abs(self.lo), np.abs(self.hi))
-        return np.hypot(c[:, 0], c[:, 1])
+    @classmethod
+    def made(
+        cls, radii: NDArray, lo: NDArray, hi: NDArray, r_max: NDArray, uniform: bool
+    ) -> Bodies:
+        """From the arrays, ``speed`` derived, every array read-only (a filter keeps its
+        default bodies from call to call)."""
+        c = np.maximum(np.abs(lo), np.abs(hi))
+        arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in (radii, lo, hi, r_max)]
+        arrays.append(np.hypot(c[:, 0], c[:, 1]))
+        for a in arrays:
+            a.flags.writeable = False
+        r, lo_, hi_, rm, sp = arrays
+        return cls(r, lo_, hi_, rm, uniform, sp)
 
     def pair_distance(self, I: NDArray, J: NDArray) -> NDArray[np.float64]:
         """(P,) the safe distance ``r_i + r_j`` of the pairs (I, J)."""

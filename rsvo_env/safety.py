@@ -48,6 +48,7 @@ class SafetyFilter:
             raise TypeError("pass either a FilterConfig or keyword arguments, not both")
         self.config = config if config is not None else FilterConfig(**kwargs)  # type: ignore[arg-type]
         self._last_floor: tuple[NDArray, pairs.Floor] | None = None
+        self._default_bodies: dict[tuple[int, int], Bodies] = {}
 
     def pair_radius(
         self,
@@ -207,8 +208,10 @@ class SafetyFilter:
         """
         cfg = self.config
         E, n = theta.shape
-        if bodies is None:
-            bodies = Bodies.of(cfg, E, n)
+        if bodies is None:  # the config's, kept: a simulator calls with the same shape
+            bodies = self._default_bodies.get((E, n))
+            if bodies is None:
+                bodies = self._default_bodies[(E, n)] = Bodies.of(cfg, E, n)
         if obstacles is not None and len(obstacles) == 0:
             obstacles = None
         dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None

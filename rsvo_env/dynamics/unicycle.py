@@ -13,17 +13,16 @@ in closed form, ``tan(psi / 2)`` decaying as ``exp(-|c| t / l)`` (``psi = theta 
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from rsvo_env.bodies import Bodies
 from rsvo_env.dynamics.model import Dynamics
 from rsvo_env.dynamics.single_integrator import SingleIntegrator
 
 if TYPE_CHECKING:
-    from rsvo_env.bodies import Bodies
     from rsvo_env.filter_config import FilterConfig
 
 
@@ -106,13 +105,8 @@ class Unicycle(Dynamics):
         extent = np.stack(
             [ac * half[:, 0] + as_ * half[:, 1], as_ * half[:, 0] + ac * half[:, 1]], -1
         )
-        row_bodies = replace(
-            bodies,
-            radii=bodies.radii + l,
-            lo=centre - extent,
-            hi=centre + extent,
-            r_max=bodies.r_max + l,
-            uniform=False,
+        row_bodies = Bodies.made(
+            bodies.radii + l, centre - extent, centre + extent, bodies.r_max + l, False
         )
         return q, nominal_b.reshape(nominal.shape), row_bodies, np.stack([cos, sin], -1)
 
