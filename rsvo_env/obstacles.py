@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from rsvo_env.rows import support
+from rsvo_env.rows import storage, support
 from rsvo_env.validation import real_array
 
 
@@ -152,11 +152,7 @@ def single_integrator_obstacle_rows(x, radii, caps, n, gamma, lo, hi, cull):
                 offsets[m + 1] += 1
     for m in range(M):
         offsets[m + 1] += offsets[m]
-    R = offsets[M]
-    A = np.empty((R, 2))
-    b = np.empty(R)
-    hh = np.empty(R)
-    which = np.empty(R, dtype=np.int64)
+    A, b, hh, which, _, _ = storage(offsets[M])
     k = 0
     for m in range(M):
         e = 0 if shared else m // n

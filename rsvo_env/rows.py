@@ -6,7 +6,7 @@ costs 10,000 rows, not 10,000 x 10,000 padded slots.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit
@@ -78,6 +78,13 @@ class Rows:
 
 
 @njit(cache=True)
+def storage(R):
+    """Room for R rows: A (R, 2), b, h (R,), neighbour (R,), and the two flags (R,), False."""
+    return (np.empty((R, 2)), np.empty(R), np.empty(R), np.empty(R, dtype=np.int64),
+            np.zeros(R, dtype=np.bool_), np.zeros(R, dtype=np.bool_))  # fmt: skip
+
+
+@njit(cache=True)
 def pack(n, I, J, A_i, b_i, b_j, h, exists, unrec, capped, lo, hi, cull):
     """Directed rows of both agents of each pair, culled and stored by agent in two O(P)
     passes. Pair p gives agent I[p] the row (A_i[p], b_i[p]) and agent J[p] the row
@@ -100,13 +107,7 @@ def pack(n, I, J, A_i, b_i, b_j, h, exists, unrec, capped, lo, hi, cull):
             offsets[j + 1] += 1
     for i in range(n):
         offsets[i + 1] += offsets[i]
-    R = offsets[n]
-    A = np.empty((R, 2))
-    b = np.empty(R)
-    hh = np.empty(R)
-    nb = np.empty(R, dtype=np.int64)
-    un = np.empty(R, dtype=np.bool_)
-    cp = np.empty(R, dtype=np.bool_)
+    A, b, hh, nb, un, cp = storage(offsets[n])
     fill = offsets[:-1].copy()
     for p in range(P):
         for side in range(2):
@@ -173,13 +174,7 @@ def _interleave(off1, A1, b1, h1, nb1, un1, cp1, off2, A2, b2, h2, nb2):
     """Agent by agent: its rows of set 1, then those of set 2 (no flags)."""
     n = off1.shape[0] - 1
     offsets = off1 + off2
-    R = offsets[n]
-    A = np.empty((R, 2))
-    b = np.empty(R)
-    hh = np.empty(R)
-    nb = np.empty(R, dtype=np.int64)
-    un = np.zeros(R, dtype=np.bool_)
-    cp = np.zeros(R, dtype=np.bool_)
+    A, b, hh, nb, un, cp = storage(offsets[n])
     for i in range(n):
         k = offsets[i]
         for src in range(off1[i], off1[i + 1]):
@@ -213,15 +208,5 @@ def with_obstacles(
         rows.offsets, rows.flat_A, rows.flat_b, rows.flat_h, rows.flat_neighbor,
         rows.flat_unrecoverable, rows.flat_capped, offsets, A, b, h, -1 - obstacle,
     )  # fmt: skip
-    return Rows(
-        flat_A=A_,
-        flat_b=b_,
-        offsets=off,
-        flat_neighbor=nb,
-        flat_h=hh,
-        pair_h=rows.pair_h,
-        flat_unrecoverable=un,
-        flat_capped=cp,
-        n_pairs=rows.n_pairs,
-        n_culled=rows.n_culled,
-    )
+    return replace(rows, flat_A=A_, flat_b=b_, offsets=off, flat_neighbor=nb, flat_h=hh,
+                   flat_unrecoverable=un, flat_capped=cp)  # fmt: skip
