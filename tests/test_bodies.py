@@ -56,10 +56,11 @@ def gaps(x, radii):
     [(50, 120, 1e-3), (50, 120, 1e3), (400, 60, 1e-3), (400, 60, 1.0), (400, 60, 1e3),
      (2000, 25, 1.0)],
 )  # fmt: skip
-def test_heterogeneous_crowd_keeps_every_pair_apart(n, steps, scale):
+@pytest.mark.parametrize("gamma", [10.0, 20.0])  # gamma dt = 0.5 and the edge, 1
+def test_heterogeneous_crowd_keeps_every_pair_apart(n, steps, scale, gamma):
     dt = 0.05
     x, goals, theta, radii, u_max = scene(n, n, scale)
-    flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=scale, u_max=3.0 * scale, dt=dt))
+    flt = SafetyFilter(FilterConfig(gamma=gamma, safety_radius=scale, u_max=3.0 * scale, dt=dt))
     worst = np.inf
     for _ in range(steps):
         res = flt.filter(x, nominal_to(goals, x, u_max), theta, radii=radii, u_max=u_max)

@@ -45,11 +45,12 @@ def body_gap(x, radii):
 
 @pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
 @pytest.mark.parametrize("seed,n", [(0, 20), (1, 40), (2, 90)])
-def test_no_body_penetrates_an_obstacle_or_another_body(seed, n, scale):
+@pytest.mark.parametrize("gamma", [10.0, 20.0])  # gamma dt = 0.5 and the edge, 1
+def test_no_body_penetrates_an_obstacle_or_another_body(seed, n, scale, gamma):
     obstacles, x, goals, radii = field(seed, n, scale)
     assert (obstacles.clearance(x, radii) > 0).all() and body_gap(x, radii) > 0
     dt, u = 0.05, 2.0 * scale
-    flt = SafetyFilter(FilterConfig(gamma=10.0, u_max=u, dt=dt))
+    flt = SafetyFilter(FilterConfig(gamma=gamma, u_max=u, dt=dt))
     theta = np.random.default_rng(seed).uniform(0, 5, n)
     closest = np.inf
     for _ in range(300):

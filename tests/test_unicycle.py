@@ -47,15 +47,20 @@ def inputs_through_the_step(u, l, dt, k=8):
 
 
 @pytest.mark.parametrize(
-    "n,steps,l_ratio,scale",
-    [(20, 200, 0.05, 1.0), (20, 200, 0.5, 1e-3), (150, 120, 0.2, 1e3), (150, 120, 0.5, 1.0),
-     (1000, 30, 0.3, 1.0)],
-)  # fmt: skip
-def test_bodies_never_overlap_and_inputs_stay_in_bounds(n, steps, l_ratio, scale):
+    "n,steps,l_ratio,scale,gamma",
+    [
+        (20, 200, 0.05, 1.0, 10.0),
+        (20, 200, 0.5, 1e-3, 20.0),
+        (150, 120, 0.2, 1e3, 10.0),
+        (150, 120, 0.5, 1.0, 20.0),
+        (1000, 30, 0.3, 1.0, 10.0),
+    ],
+)  # fmt: skip  (gamma 20: gamma dt = 1, the edge)
+def test_bodies_never_overlap_and_inputs_stay_in_bounds(n, steps, l_ratio, scale, gamma):
     p, th, goals, theta, radii = crowd(n, n, scale)
     l, dt = l_ratio * 0.2 * scale, 0.05
     cfg = FilterConfig(dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX * scale,
-                       u_min=0.0, gamma=10.0, dt=dt)  # fmt: skip
+                       u_min=0.0, gamma=gamma, dt=dt)  # fmt: skip
     flt = SafetyFilter(cfg)
     I, J = pairs.all_pairs(n)
     worst = np.inf
