@@ -23,14 +23,16 @@ from gymnasium.utils import seeding
 from numpy.typing import NDArray
 
 from rsvo_env import observation, planar, post_step
+from rsvo_env.bodies import Bodies
 from rsvo_env.filter_result import FilterResult, merge_stats
-from rsvo_env.metrics import EpisodeMetrics, collided
-from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_neighbors
+from rsvo_env.metrics import COLLISION_TOL, EpisodeMetrics, collided
+from rsvo_env.neighbors import DENSE_MAX_AGENTS
 from rsvo_env.pairs import Floor
 from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting, check_weighting
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario
+from rsvo_env.scene_checks import check_scene, check_scene_filter
 from rsvo_env.stall import StallClock, goal_distance
 from rsvo_env.state import State
 from rsvo_env.validation import check_count, check_real, real_array
@@ -108,7 +110,9 @@ class Simulator:
         self.residual: Residual | None = None
         self.weights = Weights(self.num_envs, n)  # the one writer: set_theta, set_weighting, reset
         self.rngs: list[np.random.Generator | None] = [None] * self.num_envs
-        self.state = State.empty(self.num_envs, n, self.k)
+        self.radii = scenario.radii  # (N,) body radii
+        self.state = State.empty(self.num_envs, n, self.k, scenario.num_obstacles)
+        self._bodies: dict[int, Bodies] = {}
         self.metrics = EpisodeMetrics(
             self.num_envs, n, self.dt, self.safety_radius, record_series=record_series
         )
@@ -131,10 +135,7 @@ class Simulator:
     def add_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
         """Add a safety-filter stage before the stages already there (an outer wrapper's filter
         acts first, as wrappers would), and its reward penalty ``c |u_safe - u_nominal|^2``."""
-        if flt.config.model != self.scenario.model:
-            raise ValueError(
-                f"filter dynamics {flt.config.dynamics!r} != scenario {self.scenario.dynamics!r}"
-            )
+        check_scene_filter(self.scenario, flt)
         c = check_real(intervention_penalty, "intervention_penalty")
         if c < 0:
             raise ValueError(f"intervention_penalty = {intervention_penalty!r} must be >= 0")
@@ -211,13 +212,16 @@ class Simulator:
             if seed is not None or rng is None:
                 rng, _ = seeding.np_random(seed)
             start, vel, goals = sc.initial_state(rng)
-            self._check_start(start)
+            obstacles = sc.obstacles(rng, start, goals)
+            caps = np.zeros((0, 5)) if obstacles is None else obstacles.capsules
+            check_scene(sc, start, goals, caps)
             th = sc.default_theta(rng) if theta is None else theta[e]
-            drawn.append((e, rng, start, vel, goals, th))
+            drawn.append((e, rng, start, vel, goals, th, caps))
         s = self.state
         idx = np.array(envs, dtype=np.int64)
-        for e, rng, start, vel, goals, th in drawn:
+        for e, rng, start, vel, goals, th, caps in drawn:
             self.rngs[e] = rng
+            s.obstacles[e] = caps
             s.positions[e], s.velocities[e], s.goals[e], s.starts[e] = start, vel, goals, start
             s.theta[e] = th
             s.weighting[e] = weighting
@@ -229,16 +233,6 @@ class Simulator:
         self.metrics.reset(idx)
         if self.stall is not None:
             self.stall.reset(idx, goal_distance(s.positions[idx], s.goals[idx]))
-
-    def _check_start(self, start: NDArray[np.float64]) -> None:
-        """Starting positions must be in the safe set: every pair at least R apart."""
-        d, nb = nearest_neighbors(start, 1)
-        if np.any(d[:, 0] < self.safety_radius):
-            i = int(np.argmin(d[:, 0]))
-            raise ValueError(
-                f"starting positions of agents {i} and {int(nb[i, 0])} overlap: distance "
-                f"{float(d[i, 0])!r} < safety_radius {self.safety_radius} (h < 0)"
-            )
 
     def _derive(self) -> None:
         """What follows from the current positions, once per state: the nearest distance, the K
@@ -279,6 +273,20 @@ class Simulator:
             return None
         return self.weights.floor(self.state.theta, self.state.weighting)
 
+    def _filter_bodies(self, flt: SafetyFilter) -> Bodies | None:
+        """The scenario's bodies for ``flt`` (None: identical bodies, the filter's own)."""
+        if (
+            self.scenario.plain
+            or bool(np.all(self.radii == self.radii[0]))
+            and (self.radii[0] == 0.5 * flt.config.safety_radius)
+        ):
+            return None
+        key = id(flt)
+        if key not in self._bodies:
+            radii = np.broadcast_to(self.radii, (self.num_envs, self.n))
+            self._bodies[key] = Bodies.of(flt.config, self.num_envs, self.n, radii)
+        return self._bodies[key]
+
     def apply_filters(
         self, u_nominal: NDArray[np.float64]
     ) -> tuple[NDArray, dict[str, Any] | None, NDArray]:
@@ -290,6 +298,7 @@ class Simulator:
             return u_nominal, None, np.zeros(u_nominal.shape[:-1])
         u, stats = u_nominal, None
         vel = s.velocities if self.scenario.model.needs_velocities else None
+        obstacles = s.obstacles if s.obstacles.shape[1] else None
         for flt in self.filters:
             res: FilterResult = flt.apply(
                 s.positions,
@@ -301,6 +310,8 @@ class Simulator:
                 weighting=self.weights.pair_modes(s.weighting),
                 nearest=s.nearest,
                 floor=self._floor(),
+                bodies=self._filter_bodies(flt),
+                obstacles=obstacles,
             )
             u = res.actions
             stats = merge_stats(stats, res)
@@ -360,7 +371,11 @@ class Simulator:
             "active_constraints": stats["active"],
             "max_violation": stats["max_violation"],
             "min_distance": s.nearest,
-            "cost": collided(s.nearest, self.safety_radius).astype(np.float64),
+            "cost": (
+                collided(s.nearest, self.safety_radius)
+                if s.contact is None
+                else s.contact < 1.0 - COLLISION_TOL
+            ).astype(np.float64),
             "at_goal": s.at_goal,
             "rh_active": s.rh_active,
         }

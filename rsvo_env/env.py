@@ -254,9 +254,10 @@ class RSVOParallelEnv(ParallelEnv):
             s.positions[0],
             s.goals[0],
             s.theta[0],
-            self.sim.safety_radius,
+            self.sim.radii,
             self.history,
             time=self.sim.metrics.steps[0] * self.sim.dt,
+            obstacles=s.obstacles[0],
         )
         if self.render_mode == "rgb_array":
             return self.renderer.frame()

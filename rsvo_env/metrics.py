@@ -53,8 +53,11 @@ def collided(distance: NDArray[np.float64], safety_radius: float) -> NDArray[np.
 def _accumulate(
     counts, min_distance, infeasible, sums, arrival, min_barrier, before, after, starts, goals,
     applied, requested, nearest, rh, at_goal, feasible, min_h, dt, collision_below, series,
+    contact,
 ):  # fmt: skip
     """One step of every env: counters, first-event steps, per-agent sums (see ``update``).
+    A collision step has some ``contact[e, i] < collision_below`` (``contact`` the nearest
+    distance itself, or :func:`rsvo_env.clearance.contact` with the threshold 1 - 1e-9).
 
     counts[e] = (steps, deadlock_onset, deadlock_resolved, completed, collision_steps);
     sums[e, i] = (path length, deviation); ``feasible`` and ``min_h`` are empty without filter;
@@ -65,7 +68,7 @@ def _accumulate(
     for e in range(E):
         counts[e, 0] += 1
         t = counts[e, 0]
-        step_min, step_sum = np.inf, 0.0
+        step_min, step_sum, closest = np.inf, 0.0, np.inf
         any_rh, all_mid, all_goal = False, True, True
         for i in range(n):
             dx, dy = after[e, i, 0] - before[e, i, 0], after[e, i, 1] - before[e, i, 1]
@@ -75,6 +78,7 @@ def _accumulate(
             sums[e, i, 1] += np.sqrt(ux * ux + uy * uy) * dt
             step_min = min(step_min, nearest[e, i])
             step_sum += nearest[e, i]
+            closest = min(closest, contact[e, i])
             any_rh = any_rh or rh[e, i]
             # past the middle of its start-goal segment: its projection on it beyond half-way
             sx, sy = goals[e, i, 0] - starts[e, i, 0], goals[e, i, 1] - starts[e, i, 1]
@@ -87,7 +91,7 @@ def _accumulate(
                 infeasible[e] += 1
         min_distance[e] = min(min_distance[e], step_min)
         series[e, 0], series[e, 1] = step_min, step_sum / n
-        counts[e, 4] += step_min < collision_below
+        counts[e, 4] += closest < collision_below
         for col, event in ((1, any_rh), (2, all_mid), (3, all_goal)):
             if counts[e, col] < 0 and event:
                 counts[e, col] = t
@@ -167,10 +171,16 @@ class EpisodeMetrics:
         requested: NDArray[np.float64],
         applied: NDArray[np.float64],
         filter_stats: dict[str, Any] | None = None,
+        contact: NDArray[np.float64] | None = None,
     ) -> None:
         """Record one more step of every env (arrays (E, N, ...)): positions before and after,
-        the state's derived signals, the requested and the applied controls, the filter's stats."""
+        the state's derived signals, the requested and the applied controls, the filter's stats;
+        ``contact``: :func:`rsvo_env.clearance.contact` where bodies differ or obstacles stand
+        (collisions are then counted on it)."""
         feasible, min_h = self.begin(filter_stats)
+        measure, below = (
+            (nearest, self.collision_below) if contact is None else (contact, 1.0 - COLLISION_TOL)
+        )
         _accumulate(
             self.counts,
             self.min_distance,
@@ -190,8 +200,9 @@ class EpisodeMetrics:
             feasible,
             min_h,
             self.dt,
-            self.collision_below,
+            below,
             self.step_series,
+            measure,
         )
         self.end()
 

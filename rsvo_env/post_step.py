@@ -17,6 +17,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from rsvo_env.clearance import contact
 from rsvo_env.metrics import _accumulate
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, _knn_dense_new, nearest_neighbors
 from rsvo_env.nominal import right_hand_active
@@ -33,7 +34,7 @@ def fusable(scenario: Scenario, n: int) -> bool:
     """Whether :func:`fused` serves this scenario: its hooks are the base ones, and N is small
     enough for the dense neighbour search."""
     base = all(getattr(type(scenario), h) is getattr(Scenario, h) for h in _HOOKS)
-    return base and 2 <= n <= DENSE_MAX_AGENTS
+    return base and scenario.plain and 2 <= n <= DENSE_MAX_AGENTS
 
 
 def derive(sim: Simulator) -> None:
@@ -44,6 +45,8 @@ def derive(sim: Simulator) -> None:
     s.neighbors = idx[..., : sim.k]
     s.at_goal = sim.scenario.at_goal(s.positions, s.goals)
     s.rh_active = sim.scenario.right_hand_active(s)
+    if not sim.scenario.plain:
+        s.contact = contact(s.positions, sim.radii, s.obstacles)
 
 
 def by_hooks(
@@ -56,7 +59,7 @@ def by_hooks(
     at_goal = s.at_goal
     sim.metrics.update(
         before, s.positions, s.starts, s.goals, s.nearest, s.rh_active, at_goal, requested,
-        applied, stats,
+        applied, stats, s.contact,
     )  # fmt: skip
     first_arrival, terminated, truncated = _episode_end(
         at_goal, s.reached, sim.metrics.counts, sim.max_steps
@@ -98,7 +101,7 @@ def _fused(x, before, goals, starts, reached, k, tol, rh_on, trigger, weights, c
         rh = np.zeros((E, n), dtype=np.bool_)
     _accumulate(counts, min_distance, infeasible, sums, arrival, min_barrier, before, x, starts,
                 goals, applied, requested, nearest, rh, at_goal, feasible, min_h, dt,
-                collision_below, series)  # fmt: skip
+                collision_below, series, nearest)  # fmt: skip
     first, terminated, truncated = _episode_end(at_goal, reached, counts, max_steps)
     reward = np.empty((E, n))
     _reward_terms(before.reshape(-1, 2), x.reshape(-1, 2), goals.reshape(-1, 2),

@@ -16,6 +16,8 @@ IDS = {
     "rsvo/CircularSwap-v0": "circular_swap",
     "rsvo/RampMerge-v0": "ramp_merge",
     "rsvo/Crowd-v0": "crowd",
+    "rsvo/Doorway-v0": "doorway",
+    "rsvo/ObstacleField-v0": "obstacle_field",
 }
 
 

@@ -94,18 +94,23 @@ class Renderer:
         positions: NDArray,
         goals: NDArray,
         theta: NDArray,
-        safety_radius: float,
+        radii: NDArray,
         history: Sequence[NDArray] = (),
         time: float | None = None,
+        obstacles: NDArray | None = None,
     ) -> None:
-        """Lanes, trails, goals (crosses) and agents (safety disc, theta colour) at ``time``."""
+        """Lanes, obstacles (grey, true size), trails, goals (crosses) and agents (each body its
+        true radius, theta colour) at ``time``. ``radii`` (N,) body radii; ``obstacles`` (O, 5)
+        capsules."""
         pg = self.pygame
         surf = self.surface
         surf.fill(BACKGROUND)
         for line in self.lanes:
             pg.draw.lines(surf, (180, 180, 180), False, line, 3)
+        for cap in () if obstacles is None else obstacles:
+            self._capsule(cap)
         colors = theta_colors(theta)
-        r_px = max(2, int(round(0.5 * safety_radius * self.scale)))
+        body_px = np.maximum(2, np.round(np.broadcast_to(radii, theta.shape) * self.scale))
         if len(history) > 1:
             trail = self.to_screen(np.stack(list(history)[-self.trail :]))
             for i in range(positions.shape[0]):
@@ -115,13 +120,13 @@ class Renderer:
             x, y = int(g[0]), int(g[1])
             pg.draw.line(surf, c, (x - 5, y - 5), (x + 5, y + 5), 2)
             pg.draw.line(surf, c, (x - 5, y + 5), (x + 5, y - 5), 2)
-        halo = pg.Surface((2 * r_px + 2, 2 * r_px + 2), pg.SRCALPHA)
         for i, p in enumerate(self.to_screen(positions)):
             c = tuple(int(v) for v in colors[i])
-            halo.fill((0, 0, 0, 0))
+            r_px = int(body_px[i])
+            halo = pg.Surface((2 * r_px + 2, 2 * r_px + 2), pg.SRCALPHA)
             pg.draw.circle(halo, (*c, 70), (r_px + 1, r_px + 1), r_px)
             surf.blit(halo, (int(p[0]) - r_px - 1, int(p[1]) - r_px - 1))
-            pg.draw.circle(surf, c, (int(p[0]), int(p[1])), r_px, 2)  # safety circle, R/2
+            pg.draw.circle(surf, c, (int(p[0]), int(p[1])), r_px, 2)  # the body, its radius
             pg.draw.circle(surf, c, (int(p[0]), int(p[1])), max(2, r_px // 4))
         # short lines, so that narrow arenas (the ramp merge) show them whole
         top = ([] if time is None else [f"t = {time:.2f} s"]) + self.caption.split(", ")
@@ -132,6 +137,16 @@ class Renderer:
         for k, text in enumerate(key):
             line = self.font.render(text, True, (90, 90, 90))
             surf.blit(line, (6, self.height - (k + 1) * self.font.get_linesize() - 4))
+
+    def _capsule(self, cap: NDArray) -> None:
+        """One obstacle: a disc (a circle) or a thick segment with round ends (a wall)."""
+        pg, grey = self.pygame, (120, 120, 120)
+        a, b = self.to_screen(cap[0:2]), self.to_screen(cap[2:4])
+        r = max(1, int(round(cap[4] * self.scale)))
+        for end in (a, b):
+            pg.draw.circle(self.surface, grey, (int(end[0]), int(end[1])), r)
+        if not np.array_equal(a, b):
+            pg.draw.line(self.surface, grey, a, b, 2 * r)
 
     def frame(self) -> NDArray[np.uint8]:
         arr = self.pygame.surfarray.array3d(self.surface)  # (W, H, 3)

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from rsvo_env import dynamics, nominal
 from rsvo_env.dynamics import Dynamics
+from rsvo_env.obstacles import Obstacles
 from rsvo_env.planar import within
 from rsvo_env.validation import check_count, check_positive, check_real, check_theta, real_array
 
@@ -169,6 +170,32 @@ class Scenario:
             low, high = self.params["theta_range"]
             return rng.uniform(low, high, self.num_agents)
         return np.ones(self.num_agents)
+
+    # -- bodies and obstacles -----------------------------------------------------------------
+    @property
+    def radii(self) -> NDArray[np.float64]:
+        """(N,) body radii: ``safety_radius / 2`` each (a pair safe at ``safety_radius``),
+        unless the scenario gives its own."""
+        return np.full(self.num_agents, 0.5 * self.params["safety_radius"])
+
+    @property
+    def num_obstacles(self) -> int:
+        """How many obstacles (capsules) every episode has (none here)."""
+        return 0
+
+    def obstacles(
+        self, rng: np.random.Generator, starts: NDArray, goals: NDArray
+    ) -> Obstacles | None:
+        """One episode's obstacles, ``num_obstacles`` of them (None: none), drawn from the env's
+        generator after the starts and goals."""
+        return None
+
+    @property
+    def plain(self) -> bool:
+        """Identical bodies (``safety_radius / 2``) and no obstacles: today's fast paths."""
+        return self.num_obstacles == 0 and bool(
+            np.all(self.radii == 0.5 * self.params["safety_radius"])
+        )
 
     # -- what subclasses provide --------------------------------------------------------------
     def initial_state(

@@ -251,13 +251,17 @@ class Crowd(Scenario):
         return np.array([-h, -h]), np.array([h, h])
 
 
+from rsvo_env.scenes import Doorway, ObstacleField, Scene  # noqa: E402  (they build on Scenario)
+
 SCENARIOS: dict[str, type[Scenario]] = {
-    cls.name: cls for cls in (PositionSwap, CircularSwap, RampMerge, Crowd)
-}
+    cls.name: cls for cls in (PositionSwap, CircularSwap, RampMerge, Crowd, Scene, Doorway,
+                              ObstacleField)
+}  # fmt: skip
 
 
 def make_scenario(scenario: str | Scenario, **kwargs: Any) -> Scenario:
-    """A scenario by name (``position_swap``, ``circular_swap``, ``ramp_merge``, ``crowd``)."""
+    """A scenario by name (``position_swap``, ``circular_swap``, ``ramp_merge``, ``crowd``,
+    ``custom``, ``doorway``, ``obstacle_field``)."""
     if isinstance(scenario, Scenario):
         if kwargs:
             raise TypeError("keyword arguments go to the scenario's constructor, not here")

@@ -43,9 +43,13 @@ class State:
     neighbors: NDArray[np.int64]
     reached: NDArray[np.bool_]
     weighting: list[Weighting]
+    # (E, O, 5) each env's obstacles as capsules (rsvo_env.obstacles), O = 0 without
+    obstacles: NDArray[np.float64]
+    # (E, N) rsvo_env.clearance.contact where bodies differ or obstacles stand, else None
+    contact: NDArray[np.float64] | None = None
 
     @classmethod
-    def empty(cls, num_envs: int, n: int, k: int) -> State:
+    def empty(cls, num_envs: int, n: int, k: int, num_obstacles: int = 0) -> State:
         E = num_envs
         return cls(
             positions=np.zeros((E, n, 2)),
@@ -60,6 +64,7 @@ class State:
             neighbors=np.zeros((E, n, k), dtype=np.int64),
             reached=np.zeros((E, n), dtype=bool),
             weighting=["asymmetric"] * E,
+            obstacles=np.zeros((E, num_obstacles, 5)),
         )
 
 

@@ -26,7 +26,9 @@ def stacked(obs, agents):
     return np.stack([obs[a] for a in agents])
 
 
-@pytest.mark.parametrize("name", ["position_swap", "circular_swap", "ramp_merge", "crowd"])
+@pytest.mark.parametrize(
+    "name", ["position_swap", "circular_swap", "ramp_merge", "crowd", "doorway", "obstacle_field"]
+)
 @pytest.mark.parametrize("filtered", [False, True], ids=["bare", "filtered"])
 def test_batch_equals_single_envs_bit_for_bit(name, filtered):
     # several episode ends, and so auto-resets, in 300 steps

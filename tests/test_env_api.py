@@ -13,6 +13,8 @@ SMALL = {
     "circular_swap": {"num_agents": 4, "circle_radius": 3.0, "max_steps": 300},
     "ramp_merge": {"start_distance": 30.0, "v0": 10.0, "max_steps": 300},
     "crowd": {"num_agents": 5, "max_steps": 300},
+    "doorway": {"num_agents": 4, "max_steps": 300},
+    "obstacle_field": {"num_agents": 4, "num_circles": 4, "max_steps": 300},
 }
 CASES = [(name, {}) for name in SMALL] + list(SMALL.items())
 IDS = [f"{n}-{'custom' if kw else 'default'}" for n, kw in CASES]

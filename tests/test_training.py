@@ -102,7 +102,8 @@ def test_every_scenario_has_a_valid_config_with_gamma_dt_at_most_one():
         env = configs.make_env(cfg, num_envs=1)
         assert env.sim.filters[0].config.gamma * env.scenario.params["dt"] <= 1.0
     names = {p.stem for p in configs.CONFIG_DIR.glob("*.yaml")}
-    assert names == {"circular_swap", "crowd", "position_swap", "ramp_merge"}
+    assert names == {"circular_swap", "crowd", "doorway", "obstacle_field", "position_swap",
+                     "ramp_merge"}  # fmt: skip
 
 
 def test_validation_and_evaluation_episodes_have_their_own_time_cap(tmp_path):

@@ -1,0 +1,120 @@
+"""Scenes with bodies of their own size and obstacles in the simulator: the user's own scene from
+arrays (validated), the doorway and the obstacle field; PettingZoo's seed test; safety of whole
+episodes behind the filter, collisions counted on the bodies' true sizes without it."""
+
+import numpy as np
+import pytest
+from pettingzoo.test import parallel_seed_test
+
+import rsvo_env
+import wrappers
+from rsvo_env.scenarios import make_scenario
+
+
+def custom(**kw):
+    base = dict(
+        starts=[(-6.0, 0.0), (6.0, 0.3), (0.0, -6.0), (0.2, 6.0)],
+        goals=[(6.0, 0.0), (-6.0, 0.0), (0.0, 6.0), (0.0, -6.0)],
+        radii=[0.3, 0.9, 0.5, 0.7],
+        circles=[(0.0, 0.0, 1.0)],
+        walls=[((-3.0, 3.0), (-1.0, 5.0))],
+        thickness=0.3,
+    )
+    base.update(kw)
+    return base
+
+
+@pytest.mark.parametrize(
+    "name,kwargs",
+    [("doorway", {"num_agents": 4}), ("obstacle_field", {"num_agents": 4}), ("custom", custom())],
+)
+def test_pettingzoo_seed_test(name, kwargs):
+    parallel_seed_test(lambda: wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, **kwargs)))
+
+
+def test_obstacles_are_drawn_from_the_episode_seed():
+    env = rsvo_env.parallel_env("obstacle_field")
+    env.reset(seed=3)
+    first = env.unwrapped.sim.state.obstacles.copy()
+    env.reset(seed=3)
+    assert np.array_equal(first, env.unwrapped.sim.state.obstacles)
+    env.reset(seed=4)
+    assert not np.array_equal(first, env.unwrapped.sim.state.obstacles)
+    assert first.shape == (1, 8, 5)
+
+
+@pytest.mark.parametrize(
+    "name,kwargs",
+    [("custom", custom()), ("doorway", {}), ("obstacle_field", {}),
+     ("obstacle_field", {"num_agents": 16, "side": 24.0, "num_circles": 12})],
+)  # fmt: skip
+def test_scripted_episodes_behind_the_filter_never_touch(name, kwargs):
+    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, **kwargs))
+    for seed in range(3):
+        env.reset(seed=seed, options={"theta": np.linspace(0.5, 8.0, env.unwrapped.sim.n)})
+        sim = env.unwrapped.sim
+        while env.agents:
+            _, _, _, _, info = env.step(env.unwrapped.nominal_actions())
+            assert all(info[a]["cost"] == 0.0 and info[a]["feasible"] for a in info)
+            assert sim.state.contact.min() >= 1.0 - 1e-9
+        metrics = env.unwrapped.episode_metrics
+        assert metrics["n_collision_steps"] == 0 and metrics["n_infeasible"] == 0
+
+
+def test_without_the_filter_a_body_in_a_wall_is_a_collision():
+    """A straight run into the circle (bare env): cost 1 and a collision step once the body
+    (radius 0.3) overlaps it, although its centre is 1.3 m from the circle's."""
+    sc = custom(starts=[(-4.0, 0.0), (6.0, 6.0)], goals=[(4.0, 0.0), (6.0, -6.0)],
+                radii=[0.3, 0.3], walls=None)  # fmt: skip
+    env = rsvo_env.parallel_env("custom", **sc)
+    env.reset(seed=0)
+    hit = False
+    while env.agents and not hit:
+        _, _, _, _, info = env.step(env.unwrapped.nominal_actions())
+        x = env.unwrapped.sim.state.positions[0, 0]
+        inside = np.linalg.norm(x) < 1.3 * (1 - 1e-6)
+        assert (info["agent_0"]["cost"] == 1.0) == inside
+        hit = inside
+    assert hit and env.unwrapped.sim.metrics.collision_steps[0] >= 1
+
+
+@pytest.mark.parametrize(
+    "kw,match",
+    [
+        ({"starts": [(0.0, 0.0), (0.5, 0.0), (9.0, 9.0), (9.0, -9.0)]},
+         r"starting positions of agents (0 and 1|1 and 0) overlap"),
+        ({"starts": [(0.5, 0.0), (6.0, 0.3), (0.0, -6.0), (0.2, 6.0)]},
+         r"the start of agent 0, \[0.5, 0.0\], is inside obstacle 0"),
+        ({"goals": [(6.0, 0.0), (-6.0, 0.0), (0.0, 6.0), (-2.0, 4.0)]},
+         r"the goal of agent 3, \[-2.0, 4.0\], is inside obstacle 1"),
+        ({"radii": [0.3, -0.9, 0.5, 0.7]}, r"custom.radii\[1\] = -0.9 .*agent 1"),
+        ({"radii": [0.3, 0.9]}, r"custom.radii has shape \(2,\), expected \(4,\)"),
+        ({"goals": [(6.0, 0.0)]}, r"custom.goals has shape \(1, 2\), expected \(4, 2\)"),
+        ({"starts": [(0.0, np.nan), (6.0, 0.3), (0.0, -6.0), (0.2, 6.0)]},
+         r"custom.starts\[0\] = \[0.0, nan\] is not finite \(agent 0\)"),
+        ({"circles": [(0.0, 0.0, 0.0)]}, r"circles\[0\] has radius 0.0"),
+        ({"starts": None}, r"give starts and goals"),
+    ],
+)  # fmt: skip
+def test_a_bad_scene_is_refused_naming_the_agent(kw, match):
+    with pytest.raises(ValueError, match=match):
+        make_scenario("custom", **custom(**kw))
+
+
+def test_bodies_and_obstacles_are_drawn_true_size():
+    env = rsvo_env.parallel_env("custom", **custom(), render_mode="rgb_array", render_size=300)
+    env.reset(seed=0)
+    frame = env.render()
+    r = env.unwrapped.renderer
+    centre = r.to_screen(np.zeros(2)).astype(int)
+    assert tuple(frame[centre[1], centre[0]]) == (120, 120, 120)  # inside the circle: grey
+    edge = r.to_screen(np.array([1.2, 0.0])).astype(int)
+    assert tuple(frame[edge[1], edge[0]]) != (120, 120, 120)  # beyond its radius: not
+
+
+def test_filters_that_cannot_take_the_scene_are_refused():
+    from rsvo_env.safety import FilterConfig, SafetyFilter
+
+    env = rsvo_env.parallel_env("doorway")
+    with pytest.raises(ValueError, match="filter dynamics 'double_integrator'"):
+        env.unwrapped.sim.add_filter(SafetyFilter(FilterConfig(dynamics="double_integrator")))
