@@ -12,7 +12,6 @@ env has its own seeded generator; this class is the one writer of the state.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
@@ -22,12 +21,13 @@ import numpy as np
 from gymnasium.utils import seeding
 from numpy.typing import NDArray
 
-from rsvo_env import observation, planar, post_step
+from rsvo_env import observation, obstacle_observation, planar, post_step
 from rsvo_env.bodies import Bodies
 from rsvo_env.filter_result import FilterResult, merge_stats
 from rsvo_env.metrics import COLLISION_TOL, EpisodeMetrics, collided
 from rsvo_env.neighbors import DENSE_MAX_AGENTS
 from rsvo_env.pairs import Floor
+from rsvo_env.reset_options import check_options
 from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting, check_weighting
 from rsvo_env.safety import SafetyFilter
@@ -35,10 +35,8 @@ from rsvo_env.scenarios import Scenario
 from rsvo_env.scene_checks import check_scene, check_scene_filter
 from rsvo_env.stall import StallClock, goal_distance
 from rsvo_env.state import State
-from rsvo_env.validation import check_count, check_real, real_array
+from rsvo_env.validation import check_count, check_real
 from rsvo_env.weights import Weights
-
-RESET_OPTIONS = ("theta", "weighting")
 
 
 class Simulator:
@@ -127,6 +125,11 @@ class Simulator:
     def spaces(self) -> tuple[gymnasium.spaces.Box, gymnasium.spaces.Box]:
         """One agent's observation and action spaces (bounded Boxes, float32)."""
         low, high = observation.bounds(self.limits, self.k, self.stall is not None)
+        k_o = obstacle_observation.count(self.scenario.num_obstacles)
+        if k_o:
+            reach = float(self.radii.max()) + self.scenario.max_obstacle_radius
+            lo_o, hi_o = obstacle_observation.bounds(self.limits.p, reach, k_o)
+            low, high = np.r_[low, lo_o].astype(np.float32), np.r_[high, hi_o].astype(np.float32)
         return (
             gymnasium.spaces.Box(low, high, dtype=np.float32),
             gymnasium.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32),
@@ -160,39 +163,9 @@ class Simulator:
 
     # ---- episodes ---------------------------------------------------------------------------
     def check_options(self, options: dict | None) -> tuple[NDArray | None, Weighting]:
-        """Theta (E, N) or None, and the weighting, from reset options; other keys are left for
-        wrappers (PettingZoo's own API test passes one of its own)."""
-        options = options or {}
-        unknown = sorted(set(options) - set(RESET_OPTIONS) - self._warned_options)
-        if unknown:
-            # not an error: PettingZoo's API test passes an option of its own
-            self._warned_options.update(unknown)
-            warnings.warn(
-                f"reset options {unknown} are not used by rsvo_env; it reads {list(RESET_OPTIONS)}",
-                stacklevel=3,
-            )
-        theta = None
-        if "theta" in options:
-            raw = real_array(options["theta"], "theta")
-            # exactly (N,) (every env) or (E, N) (one row an env): nothing reshaped or broadcast
-            if raw.ndim == 1 and raw.shape != (self.n,):
-                raise ValueError(f"theta has {raw.shape[0]} entries, expected {self.n}")
-            if raw.shape not in ((self.n,), (self.num_envs, self.n)):
-                raise ValueError(
-                    f"theta has shape {raw.shape}, expected ({self.n},) or "
-                    f"({self.num_envs}, {self.n})"
-                )
-            rows = raw if raw.ndim == 2 else raw[None]
-            checked = []
-            for e, row in enumerate(rows):
-                try:
-                    checked.append(self.scenario.check_theta(row))
-                except ValueError as exc:
-                    raise ValueError(f"{exc} (env {e})" if raw.ndim == 2 else str(exc)) from None
-            theta = np.broadcast_to(np.stack(checked), (self.num_envs, self.n))
-        weighting = options.get("weighting", self.weighting)
-        check_weighting(weighting, np.ones(self.n) if theta is None else theta[0])
-        return theta, weighting
+        """Theta (E, N) or None, and the weighting, from reset options
+        (:func:`rsvo_env.reset_options.check_options`)."""
+        return check_options(self, options)
 
     def reset(
         self,
@@ -384,14 +357,22 @@ class Simulator:
         """Observations (E, N, D) of all envs, or of the given ones."""
         s = self.state
         pick = slice(None) if envs is None else envs
-        return observation.observe(
+        frame = s.frame_angle[pick] if self.frame == "goal" else None
+        obs = observation.observe(
             s.positions[pick],
             s.velocities[pick],
             s.goals[pick],
             s.theta[pick],
             self.weights.neighbors(s.theta, s.weighting, s.neighbors[pick], pick),
             s.neighbors[pick],
-            s.frame_angle[pick] if self.frame == "goal" else None,
-            self.safety_radius,
+            frame,
+            self.radii,
             None if self.stall is None else self.stall.value(pick),
         )
+        k_o = obstacle_observation.count(s.obstacles.shape[1])
+        if not k_o:
+            return obs
+        seen = obstacle_observation.observe(
+            s.positions[pick], self.radii, s.obstacles[pick], frame, k_o
+        )
+        return np.concatenate([obs, seen.astype(np.float32)], axis=-1)

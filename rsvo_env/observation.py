@@ -42,7 +42,9 @@ def limits_for(scenario: Any) -> Limits:
     horizon = p["max_steps"] * p["dt"]
     extent = float(max(np.abs(lo).max(), np.abs(hi).max()))
     reach, vel = scenario.model.reach(p, scenario.u_max, horizon)
-    return Limits(extent + reach, vel, p["theta_max"], float(p["safety_radius"]))
+    # the largest pair distance: the neighbour gap's lower bound
+    R = max(float(p["safety_radius"]), 2.0 * float(np.max(scenario.radii)))
+    return Limits(extent + reach, vel, p["theta_max"], R)
 
 
 @dataclass(frozen=True)
@@ -135,7 +137,7 @@ if _KERNEL_LAYOUT != tuple(tuple(x for f in t for x in (f.name, f.width)) for t 
 
 
 @njit(cache=True)
-def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, R, stall, own, out):
+def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, own, out):
     E, n, K = nb.shape
     for e in range(E):
         for i in range(n):
@@ -162,7 +164,7 @@ def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, R, stall, ow
                 o[b + 4], o[b + 5] = c * hx - s * hy, s * hx + c * hy
                 o[b + 6] = omega[e, i, k]
                 o[b + 7] = theta[e, j]
-                o[b + 8] = np.sqrt(rx * rx + ry * ry) - R
+                o[b + 8] = np.sqrt(rx * rx + ry * ry) - (radii[i] + radii[j])
                 o[b + 9] = 1.0
 
 
@@ -174,13 +176,14 @@ def observe(
     neighbor_omega: NDArray[np.float64],
     neighbors: NDArray[np.int64],
     frame_angle: NDArray[np.float64] | None,
-    safety_radius: float,
+    radii: NDArray[np.float64],
     stall: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float32]:
     """Observations (E, N, D) float32 of E envs; ``neighbors`` (E, N, K) are local indices and
     ``neighbor_omega`` (E, N, K) each agent's weight against them. ``frame_angle`` (E, N)
-    rotates into each agent's goal frame (None: world frame); ``stall`` (E, N): the stall clock,
-    observed when given."""
+    rotates into each agent's goal frame (None: world frame); ``radii`` (N,) the body radii (a
+    neighbour's ``gap`` is the centre distance less ``r_i + r_j``); ``stall`` (E, N): the stall
+    clock, observed when given."""
     E, n, K = neighbors.shape
     out = np.empty((E, n, size(K, stall is not None)), dtype=np.float32)
     use_frame = frame_angle is not None
@@ -196,7 +199,7 @@ def observe(
         neighbors,
         angle,
         use_frame,
-        float(safety_radius),
+        np.ascontiguousarray(radii, dtype=np.float64),
         clock,
         OWN_WIDTH + int(stall is not None),  # where the neighbours' blocks begin
         out,

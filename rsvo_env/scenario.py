@@ -183,6 +183,11 @@ class Scenario:
         """How many obstacles (capsules) every episode has (none here)."""
         return 0
 
+    @property
+    def max_obstacle_radius(self) -> float:
+        """The largest capsule radius any episode's obstacle has (0 without obstacles)."""
+        return 0.0
+
     def obstacles(
         self, rng: np.random.Generator, starts: NDArray, goals: NDArray
     ) -> Obstacles | None:

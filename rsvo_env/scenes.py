@@ -77,6 +77,10 @@ class Scene(Scenario):
     def num_obstacles(self) -> int:
         return len(self._obstacles)
 
+    @property
+    def max_obstacle_radius(self) -> float:
+        return float(self._obstacles.capsules[:, 4].max(initial=0.0))
+
     def obstacles(self, rng, starts, goals):
         return self._obstacles if len(self._obstacles) else None
 
@@ -110,6 +114,10 @@ class Doorway(Scenario):
     @property
     def num_obstacles(self) -> int:
         return 2
+
+    @property
+    def max_obstacle_radius(self) -> float:
+        return 0.5 * self.params["thickness"]
 
     def _walls(self) -> Obstacles:
         p = self.params
@@ -176,6 +184,10 @@ class ObstacleField(Scenario):
     @property
     def num_obstacles(self) -> int:
         return int(self.params["num_circles"])
+
+    @property
+    def max_obstacle_radius(self) -> float:
+        return float(self.params["circle_radius"][1])
 
     def initial_state(self, rng):
         p, n = self.params, self.num_agents

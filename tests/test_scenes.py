@@ -118,3 +118,29 @@ def test_filters_that_cannot_take_the_scene_are_refused():
     env = rsvo_env.parallel_env("doorway")
     with pytest.raises(ValueError, match="filter dynamics 'double_integrator'"):
         env.unwrapped.sim.add_filter(SafetyFilter(FilterConfig(dynamics="double_integrator")))
+
+
+def test_observation_sees_the_nearest_obstacle_surfaces_and_true_gaps():
+    env = rsvo_env.parallel_env("custom", **custom(), num_obs_neighbors=3)
+    obs, _ = env.reset(seed=0)
+    sim = env.unwrapped.sim
+    k = 3
+    base = 5 + 10 * k
+    assert env.observation_space("agent_0").shape == (base + 2 * 4,)  # two obstacles, 4 each
+    o = obs["agent_1"]  # at (6, 0.3), radius 0.9: the circle (0, 0, 1) is nearest
+    x = sim.state.positions[0, 1]
+    point = o[base : base + 2]
+    expect = -x / np.linalg.norm(x) * (np.linalg.norm(x) - 1.0)
+    np.testing.assert_allclose(point, expect, rtol=1e-6)
+    assert o[base + 2] == pytest.approx(np.linalg.norm(x) - 1.0 - 0.9, rel=1e-6)
+    assert o[base + 3] == 1.0
+    # each neighbour's gap is its centre distance less both radii
+    nb = sim.state.neighbors[0, 1]
+    d = np.linalg.norm(sim.state.positions[0, nb] - x, axis=1)
+    gaps = o[5 + 8 : 5 + 10 * k : 10]
+    np.testing.assert_allclose(gaps, d - 0.9 - sim.radii[nb], rtol=1e-6)
+
+
+def test_plain_scenes_keep_their_observation_layout():
+    env = rsvo_env.parallel_env("crowd", num_agents=5, num_obs_neighbors=3)
+    assert env.observation_space("agent_0").shape == (5 + 10 * 3,)
