@@ -9,7 +9,7 @@ Each agent's QP has its own box ``lo_i <= u <= hi_i``; ``u_max`` per agent is th
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -51,6 +51,9 @@ class Bodies:
     uniform: bool
     # (M,) each agent's largest input vector |max(|lo|, |hi|)| (the box's far corner)
     speed: NDArray[np.float64]
+    # (M,) the unicycle's look-ahead distance of each agent, 0 for a holonomic agent (a single
+    # integrator in a mixed crowd); None: the config's for every agent
+    lookahead: NDArray[np.float64] | None = None
 
     @classmethod
     def of(
@@ -89,6 +92,15 @@ class Bodies:
             a.flags.writeable = False
         r, lo_, hi_, rm, sp = arrays
         return cls(r, lo_, hi_, rm, uniform, sp)
+
+    def with_holonomic(self, holonomic: NDArray, v_max: float, lookahead: float) -> Bodies:
+        """A mixed crowd of unicycles: agents flagged ``holonomic`` (M,) are single integrators
+        with the box ``[-v_max, v_max]`` per component and look-ahead 0."""
+        h = holonomic[:, None]
+        lo = np.where(h, -v_max, self.lo)
+        hi = np.where(h, v_max, self.hi)
+        made = Bodies.made(self.radii, lo, hi, self.r_max, False)
+        return replace(made, lookahead=np.where(holonomic, 0.0, lookahead))
 
     def pair_distance(self, I: NDArray, J: NDArray) -> NDArray[np.float64]:
         """(P,) the safe distance ``r_i + r_j`` of the pairs (I, J)."""

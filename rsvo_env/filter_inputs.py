@@ -72,3 +72,13 @@ def check_headings(headings: ArrayLike | None, shape: tuple[int, ...], model: st
         where = "".join(f"[{k}]" for k in idx)
         raise ValueError(f"headings{where} = {float(hd[idx])!r} is not finite (agent {idx[-1]})")
     return hd
+
+
+def check_holonomic(holonomic: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.bool_]:
+    """One bool per agent (True: a single integrator in a mixed crowd of unicycles)."""
+    arr = np.asarray(holonomic)
+    if arr.dtype != np.bool_:
+        raise ValueError(f"holonomic must be bools (True: a single integrator), got {arr.dtype}")
+    if arr.shape != shape:
+        raise ValueError(f"holonomic has shape {arr.shape}, expected {shape}")
+    return arr

@@ -21,7 +21,12 @@ from rsvo_env import barriers, pairs, solvers
 from rsvo_env.bodies import Bodies
 from rsvo_env.dynamics.unicycle import rotate_rows
 from rsvo_env.filter_config import FilterConfig
-from rsvo_env.filter_inputs import check_bodies, check_headings, check_obstacles
+from rsvo_env.filter_inputs import (
+    check_bodies,
+    check_headings,
+    check_holonomic,
+    check_obstacles,
+)
 from rsvo_env.filter_result import FilterResult, per_env
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_distance
 from rsvo_env.obstacles import Obstacles
@@ -122,6 +127,7 @@ class SafetyFilter:
         u_max: ArrayLike | None = None,
         obstacles: Obstacles | None = None,
         headings: ArrayLike | None = None,
+        holonomic: ArrayLike | None = None,
     ) -> FilterResult:
         """Safe actions (paper, eq. ``qp`` per agent) for one scene or a batch of scenes.
 
@@ -133,8 +139,10 @@ class SafetyFilter:
         ``[-u_max_i, u_max_i]`` per component (default: the config's box); obstacles: static
         circles and walls (:class:`rsvo_env.obstacles.Obstacles`), one row each, weight 1;
         headings: (N,) or (E, N) radians, for the unicycle (nominal and actions are then
-        (v, w), ``docs/unicycle.md``). Bad input raises ``ValueError`` naming field, agent and
-        value.
+        (v, w), ``docs/unicycle.md``); holonomic: (N,) or (E, N) bools, for the unicycle: the
+        agents that are single integrators in a mixed crowd (their nominal and action a world
+        velocity, each component within ``u_max``). Bad input raises ``ValueError`` naming
+        field, agent and value.
         """
         cfg = self.config
         pos = check_vectors(positions, "positions", lead=None)
@@ -170,6 +178,15 @@ class SafetyFilter:
         if cfg.model.needs_headings:
             hd = check_headings(headings, (*lead, n), cfg.dynamics)
             hd = hd[None] if single else hd
+            if holonomic is not None:
+                mask = check_holonomic(holonomic, (*lead, n)).reshape(-1)
+                if bodies is None:
+                    bodies = Bodies.of(cfg, lead[0] if lead else 1, n)
+                bodies = bodies.with_holonomic(mask, float(np.max(cfg.u_max)), cfg.lookahead)
+        elif holonomic is not None:
+            raise ValueError(
+                f"holonomic is for the unicycle's mixed crowds, not the {cfg.dynamics}"
+            )
         kw = {"with_rows": True, "bodies": bodies, "obstacles": caps, "headings": hd}
         if single:
             vel = None if vel is None else vel[None]
@@ -253,7 +270,7 @@ class SafetyFilter:
             cfg.solver, solve_nominal.reshape(E * n, 2), rows.flat_A, rows.flat_b, rows.offsets,
             solve_box.lo, solve_box.hi,
         )  # fmt: skip
-        actions = cfg.model.lower(cfg, actions)
+        actions = cfg.model.lower(cfg, actions, solve_box)
         nom = nominal.reshape(E * n, 2)
         env_of_row = rows.owner // n
         return FilterResult(

@@ -168,3 +168,49 @@ def test_culled_unicycle_filter_equals_all_pairs():
         bound += int(a.active.sum())
         p, th = unicycle_step(p, th, a.actions, l, 0.05)
     assert bound > 0
+
+
+@pytest.mark.parametrize("n,steps,scale", [(40, 150, 1.0), (300, 60, 1e-3), (300, 60, 1e3)])
+def test_mixed_crowds_of_single_integrators_and_unicycles(n, steps, scale):
+    """Every other agent a single integrator (holonomic): bodies never overlap, the single
+    integrators stay in their box, the unicycles' inputs in their bounds."""
+    p, th, goals, theta, radii = crowd(n, n + 1, scale)
+    holo = np.arange(n) % 2 == 0
+    l, dt = 0.08 * scale, 0.05
+    flt = SafetyFilter(FilterConfig(dynamics="unicycle", lookahead=l, w_max=W_MAX,
+                                    u_max=V_MAX * scale, gamma=20.0, dt=dt))  # fmt: skip
+    I, J = pairs.all_pairs(n)
+    worst = np.inf
+    for _ in range(steps):
+        nom = nominal(p, th, goals, l, V_MAX * scale)
+        d = goals - p
+        dist = np.linalg.norm(d, axis=1, keepdims=True)
+        nom[holo] = (d / np.maximum(dist, 1e-300) * np.minimum(dist, V_MAX * scale))[holo]
+        res = flt.filter(p, nom, theta, headings=th, radii=radii, holonomic=holo)
+        assert res.feasible.all()
+        u = res.actions
+        assert (np.abs(u[holo]) <= V_MAX * scale * (1 + 1e-12)).all()
+        v, w = inputs_through_the_step(u[~holo], l, dt)
+        assert (v >= -1e-12 * scale).all() and (v <= V_MAX * scale * (1 + 1e-12)).all()
+        assert (np.abs(w) <= W_MAX * (1 + 1e-12)).all()
+        p_uni, th_uni = unicycle_step(p[~holo], th[~holo], u[~holo], l, dt)
+        p = p.copy()
+        p[holo] = p[holo] + dt * u[holo]
+        p[~holo], th = p_uni, th.copy()
+        th[~holo] = th_uni
+        gap = np.linalg.norm(p[I] - p[J], axis=1) / (radii[I] + radii[J])
+        worst = min(worst, float(gap.min()))
+    assert 1.0 - 1e-9 <= worst < 1.5
+
+
+def test_holonomic_is_checked():
+    flt = SafetyFilter(FilterConfig(dynamics="unicycle", lookahead=0.1, w_max=1.0))
+    x = np.array([[0.0, 0.0], [5.0, 0.0]])
+    with pytest.raises(ValueError, match="holonomic must be bools"):
+        flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), holonomic=[1, 0])
+    with pytest.raises(ValueError, match=r"holonomic has shape \(3,\)"):
+        flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2),
+                   holonomic=np.zeros(3, bool))  # fmt: skip
+    with pytest.raises(ValueError, match="holonomic is for the unicycle"):
+        SafetyFilter(FilterConfig()).filter(x, np.zeros((2, 2)), np.ones(2),
+                                            holonomic=np.zeros(2, bool))  # fmt: skip

@@ -68,7 +68,7 @@ class Dynamics:
         coordinates."""
         raise NotImplementedError
 
-    def lower(self, cfg: FilterConfig, actions: NDArray) -> NDArray:
+    def lower(self, cfg: FilterConfig, actions: NDArray, bodies: Bodies) -> NDArray:
         """The QP's solution back in the model's inputs (inverse of :meth:`lift`'s nominal)."""
         return actions
 

@@ -88,30 +88,32 @@ class Unicycle(Dynamics):
         return np.array([0.0, -b]), np.array([v_hi, b])
 
     def lift(self, cfg, positions, headings, nominal, bodies):
-        l = float(cfg.lookahead)
-        e = heading_vectors(headings)
-        q = positions + l * e
         M = len(bodies.radii)
-        cos, sin = e.reshape(M, 2).T
+        l = np.full(M, float(cfg.lookahead)) if bodies.lookahead is None else bodies.lookahead
+        e = heading_vectors(headings).reshape(M, 2)
+        # a holonomic agent (l = 0, a mixed crowd) is a single integrator in the world frame
+        cos, sin = np.where(l > 0, e[:, 0], 1.0), np.where(l > 0, e[:, 1], 0.0)
+        q = positions + (l[:, None] * e).reshape(positions.shape)
         nom = nominal.reshape(M, 2)
-        nominal_b = np.stack([nom[:, 0], l * nom[:, 1]], -1)
+        nominal_b = np.stack([nom[:, 0], np.where(l > 0, l, 1.0) * nom[:, 1]], -1)
         # the world-frame box that holds each agent's rotated box: a valid (wider) box for
         # culling, since a row that cannot bind over it cannot bind over the rotated one
         mid, half = 0.5 * (bodies.lo + bodies.hi), 0.5 * (bodies.hi - bodies.lo)
-        centre = np.stack(
-            [cos * mid[:, 0] - sin * mid[:, 1], sin * mid[:, 0] + cos * mid[:, 1]], -1
-        )
+        centre = turn(mid, cos, sin)
         ac, as_ = np.abs(cos), np.abs(sin)
         extent = np.stack(
             [ac * half[:, 0] + as_ * half[:, 1], as_ * half[:, 0] + ac * half[:, 1]], -1
         )
-        row_bodies = Bodies.made(
-            bodies.radii + l, centre - extent, centre + extent, bodies.r_max + l, False
-        )
+        radii = bodies.radii + l
+        r_max = radii.reshape(len(bodies.r_max), -1).max(axis=1)
+        row_bodies = Bodies.made(radii, centre - extent, centre + extent, r_max, False)
         return q, nominal_b.reshape(nominal.shape), row_bodies, np.stack([cos, sin], -1)
 
-    def lower(self, cfg, actions):
-        return np.stack([actions[..., 0], actions[..., 1] / cfg.lookahead], -1)
+    def lower(self, cfg, actions, bodies):
+        if bodies.lookahead is None:
+            return np.stack([actions[..., 0], actions[..., 1] / cfg.lookahead], -1)
+        l = bodies.lookahead.reshape(actions.shape[:-1])
+        return np.stack([actions[..., 0], actions[..., 1] / np.where(l > 0, l, 1.0)], -1)
 
     # the rows, radii and obstacle rows are the single integrator's on the look-ahead point
     rows = SingleIntegrator.rows
