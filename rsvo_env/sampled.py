@@ -18,7 +18,7 @@ def sampled_braking_rhs(
     U: float,
     gamma: float,
     dt: float,
-    safety_radius: float,
+    safety_radius: float | NDArray,
     reversal: bool = True,
 ) -> NDArray[np.float64]:
     """RHS of the pair row ``-dp.(a_i - a_j) <= RHS`` under which the braking barrier at the
@@ -36,7 +36,9 @@ def sampled_braking_rhs(
     tangential speed (:func:`double_integrator_rows` adds the row that forbids it).
     """
     out = np.empty(len(dist))
-    _sampled(dist, q, dv2, h, A, U, gamma, dt, safety_radius, reversal, out)
+    # one distance for every pair, or one each (obstacles: r_i + rho_o)
+    Ds = np.ascontiguousarray(np.broadcast_to(np.asarray(safety_radius, float), dist.shape))
+    _sampled(dist, q, dv2, h, A, U, gamma, dt, Ds, reversal, out)
     return out
 
 
@@ -57,7 +59,7 @@ def _sampled(dist, q, dv2, h, A, U, gamma, dt, safety_radius, reversal, out):
         wt = np.sqrt(wt2)
         T_min = max(dt * wt - dt * dt * U, 0.0)
         rho_max = np.hypot(d + dt * qp + dt * dt * U, dt * wt + dt * dt * U)
-        Ds = safety_radius - T_min * T_min / (2.0 * rho_max)
+        Ds = safety_radius[p] - T_min * T_min / (2.0 * rho_max)
         # closing after the step: y = -q - dt alpha_r > 0 solves y' = y + E,
         # y'^2 / (2A) + dt (y' - E) / 2 = K
         K = d + 0.5 * dt * qp - Ds - c

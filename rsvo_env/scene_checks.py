@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from rsvo_env.clearance import contact
 from rsvo_env.dynamics import Dynamics
-from rsvo_env.neighbors import nearest_neighbors
 from rsvo_env.obstacles import nearest_points
 
 if TYPE_CHECKING:
@@ -23,13 +23,14 @@ def check_scene(scenario: Scenario, starts: NDArray, goals: NDArray, capsules: N
     radii = scenario.radii
     n = len(starts)
     if n >= 2:
-        d, nb = nearest_neighbors(starts, n - 1)
-        gap = d / (radii[:, None] + radii[nb])
-        i, k = np.unravel_index(int(np.argmin(gap)), gap.shape)
-        if gap[i, k] < 1.0:
-            j = int(nb[i, k])
+        ratio = contact(starts[None], radii)[0]  # O(N) on a grid
+        i = int(np.argmin(ratio))
+        if ratio[i] < 1.0:
+            d = np.linalg.norm(starts - starts[i], axis=1)
+            others = np.where(np.arange(n) == i, np.inf, d / (radii[i] + radii))
+            j = int(np.argmin(others))
             raise ValueError(
-                f"starting positions of agents {i} and {j} overlap: distance {float(d[i, k])!r} "
+                f"starting positions of agents {i} and {j} overlap: distance {float(d[j])!r} "
                 f"< {float(radii[i] + radii[j])!r}, the sum of their radii (h < 0)"
             )
     if len(capsules) == 0:

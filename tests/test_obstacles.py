@@ -146,7 +146,70 @@ def test_obstacles_refused_where_not_supported():
     x = np.array([[0.0, 0.0], [5.0, 0.0]])
     with pytest.raises(ValueError, match="pass an Obstacles"):
         flt.filter(x, np.zeros((2, 2)), np.ones(2), obstacles=[(0, 0, 1)])
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
+@pytest.mark.parametrize("dt,gamma", [(0.05, 2.0), (0.05, 20.0), (0.1, 10.0), (0.02, 50.0)])
+@pytest.mark.parametrize("speed_share", [0.0, 0.5, 0.99])
+def test_a_double_integrator_brakes_before_a_circle_from_any_stoppable_speed(
+    scale, dt, gamma, speed_share
+):
+    """Head on, full throttle into the circle, from a speed the box can stop before it (h >= 0):
+    never inside, every QP feasible, and it ends up at the circle."""
+    from rsvo_env.dynamics import double_integrator_step
+
+    a_max, rho = 1.0 * scale, 1.0 * scale
+    obstacles = Obstacles.of(circles=[(0.0, 0.0, rho)])
+    flt = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=a_max, gamma=gamma,
+                                    safety_radius=scale, dt=dt))  # fmt: skip
+    Ds = 0.5 * scale + rho
+    room = 3.0 * scale
+    v0 = np.sqrt(2 * a_max * room) * speed_share  # h = room - v0^2 / (2 a_max) >= 0
+    x, v = np.array([[-(Ds + room), 0.0]]), np.array([[v0, 0.0]])
+    step = 0.05 if dt is None else dt
+    for _ in range(int(30 / step)):
+        res = flt.filter(x, np.array([[a_max, 0.0]]), np.ones(1), v, obstacles=obstacles)
+        assert res.feasible.all()
+        x, v = double_integrator_step(x, v, res.actions, step)
+        assert np.linalg.norm(x[0]) >= Ds * (1 - 1e-9)
+    # it did come up to the circle (the filter let it approach, and held it there)
+    assert np.linalg.norm(x[0]) < Ds + 0.2 * room
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_double_integrator_through_a_field_of_circles_never_enters_one(seed):
+    """One vehicle at a time, full speed through circles spaced farther apart than it needs to
+    stop (one active obstacle at a time: the case the proof covers), from many starts."""
+    from rsvo_env.dynamics import double_integrator_step
+
+    rng = np.random.default_rng(seed)
+    grid = np.stack(np.meshgrid([10.0, 20.0, 30.0], [8.0, 18.0, 28.0]), -1).reshape(-1, 2)
+    circles = np.c_[grid + rng.uniform(-1, 1, grid.shape), rng.uniform(0.5, 1.5, len(grid))]
+    obstacles = Obstacles.of(circles=circles)
+    flt = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=1.0, gamma=2.0, dt=0.05))
+    near = np.inf
+    for y in np.linspace(4.0, 32.0, 8):
+        x, v = np.array([[0.0, y]]), np.zeros((1, 2))
+        goal = np.array([[40.0, 36.0 - y]])
+        for _ in range(700):
+            nominal = 2.0 * (straight_nominal(x, goal, 2.0) - v)
+            res = flt.filter(x, nominal, np.ones(1), v, obstacles=obstacles)
+            assert res.feasible.all()
+            x, v = double_integrator_step(x, v, res.actions, 0.05)
+            clear = float(obstacles.clearance(x, 0.5).min())
+            assert clear >= -1e-9
+            near = min(near, clear)
+    assert near < 0.2, "no vehicle came near a circle"
+
+
+def test_walls_are_refused_for_the_double_integrator():
     di = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=2.0))
-    with pytest.raises(ValueError, match="obstacles are not available for the double_integrator"):
+    x = np.array([[0.0, 0.0], [5.0, 0.0]])
+    with pytest.raises(ValueError, match="walls are not available for the double_integrator"):
         di.filter(x, np.zeros((2, 2)), np.ones(2), np.zeros((2, 2)),
-                  obstacles=Obstacles.of(circles=[(2.0, 2.0, 0.5)]))  # fmt: skip
+                  obstacles=Obstacles.of(walls=[((2.0, -1.0), (2.0, 1.0))]))  # fmt: skip
+    tight = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=2.0, dt=0.4, gamma=2.0,
+                                      safety_radius=1.0))  # fmt: skip
+    with pytest.raises(ValueError, match="sampled-data guarantee"):
+        tight.filter(x, np.zeros((2, 2)), np.ones(2), np.zeros((2, 2)),
+                     obstacles=Obstacles.of(circles=[(2.0, 2.0, 0.01)]))  # fmt: skip

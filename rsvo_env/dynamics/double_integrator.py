@@ -59,6 +59,26 @@ class DoubleIntegrator(Dynamics):
             barrier=cfg.barrier, split=cfg.split, gamma2=cfg.gamma2, dt=cfg.dt,
         )  # fmt: skip
 
+    def obstacle_rows(self, cfg, positions, velocities, bodies, capsules, n):
+        from rsvo_env.double_integrator_obstacles import double_integrator_obstacle_rows
+
+        walls = np.any(capsules[..., 0:2] != capsules[..., 2:4], axis=-1)
+        if walls.any():
+            raise ValueError(
+                "walls are not available for the double_integrator yet (circles are): obstacle "
+                f"{int(np.nonzero(walls)[-1][0])} is a segment"
+            )
+        if cfg.dt is not None and cfg.barrier == "braking":
+            lo, hi = cfg.lo, cfg.hi
+            reach = float(np.min(np.minimum(-lo, hi)) + np.hypot(*np.maximum(-lo, hi)))
+            Ds = float(bodies.radii.min()) + float(capsules[..., 4].min())
+            if cfg.dt**2 * reach >= Ds:
+                raise ValueError(
+                    f"an obstacle's safe distance r + rho = {Ds!r} <= dt^2 (a_max + |u_max|) = "
+                    f"{cfg.dt**2 * reach!r}: the sampled-data guarantee needs it larger"
+                )
+        return double_integrator_obstacle_rows(cfg, positions, velocities, bodies, capsules, n)
+
     def culling_radii(self, cfg, omega_floor, velocities, bodies):
         from rsvo_env import pairs
 
