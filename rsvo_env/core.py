@@ -201,6 +201,7 @@ class Simulator:
         self.weights.update(idx, s.theta, s.weighting)
         seg = s.goals[idx] - s.starts[idx]
         s.frame_angle[idx] = np.arctan2(seg[..., 1], seg[..., 0])
+        s.headings[idx] = s.frame_angle[idx]  # a unicycle starts facing its goal
         self._derive()
         s.reached[idx] = s.at_goal[idx]
         self.metrics.reset(idx)
@@ -221,6 +222,8 @@ class Simulator:
         """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by
         u_max, rotate out of the goal frame; with residual actions, add them to the scripted
         command (see :meth:`set_residual`)."""
+        if self.scenario.model.needs_headings:  # its actions are (v, w), in its body frame
+            return self.scenario.model.controls(actions, self.scenario.params)
         u = planar.clip_norm(actions, 1.0, self.u_max)
         if self.frame == "goal":
             u = planar.rotate(u, self.state.frame_angle)
@@ -230,6 +233,8 @@ class Simulator:
 
     def to_actions(self, controls: NDArray[np.float64]) -> NDArray[np.float64]:
         """Physical controls to the normalised action frame (no clipping)."""
+        if self.scenario.model.needs_headings:
+            return self.scenario.model.actions(controls, self.scenario.params)
         u = controls / self.u_max
         if self.frame == "goal":
             u = planar.rotate(u, -self.state.frame_angle)
@@ -285,6 +290,7 @@ class Simulator:
                 floor=self._floor(),
                 bodies=self._filter_bodies(flt),
                 obstacles=obstacles,
+                headings=s.headings if self.scenario.model.needs_headings else None,
             )
             u = res.actions
             stats = merge_stats(stats, res)
@@ -302,7 +308,12 @@ class Simulator:
         u_nominal = self.to_controls(actions)
         u, stats, intervention = self.apply_filters(u_nominal)
         before = s.positions
-        s.positions, s.velocities = sc.model.step(s.positions, s.velocities, u, self.dt)
+        if sc.model.needs_headings:
+            s.positions, s.headings, s.velocities = sc.model.advance(
+                s.positions, s.headings, u, self.dt, sc.params
+            )
+        else:
+            s.positions, s.velocities = sc.model.step(s.positions, s.velocities, u, self.dt)
         after = post_step.fused if self.fused_post_step else post_step.by_hooks
         reward, terminated, truncated = after(self, before, u_nominal, u, stats)
         penalty = sum(self.penalties)

@@ -258,6 +258,7 @@ class RSVOParallelEnv(ParallelEnv):
             self.history,
             time=self.sim.metrics.steps[0] * self.sim.dt,
             obstacles=s.obstacles[0],
+            headings=s.headings[0] if self.scenario.model.needs_headings else None,
         )
         if self.render_mode == "rgb_array":
             return self.renderer.frame()

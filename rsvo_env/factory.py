@@ -85,4 +85,6 @@ def filter_config(
         barrier=p.get("barrier", "braking") if barrier is None else barrier,
         split=p.get("split", "capability") if split is None else split,
         neighbor_radius=neighbor_radius,
+        lookahead=p.get("lookahead"),
+        w_max=p.get("w_max"),
     )

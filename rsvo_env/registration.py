@@ -18,6 +18,7 @@ IDS = {
     "rsvo/Crowd-v0": "crowd",
     "rsvo/Doorway-v0": "doorway",
     "rsvo/ObstacleField-v0": "obstacle_field",
+    "rsvo/UnicycleCrowd-v0": "unicycle_crowd",
 }
 
 

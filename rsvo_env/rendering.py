@@ -98,10 +98,11 @@ class Renderer:
         history: Sequence[NDArray] = (),
         time: float | None = None,
         obstacles: NDArray | None = None,
+        headings: NDArray | None = None,
     ) -> None:
         """Lanes, obstacles (grey, true size), trails, goals (crosses) and agents (each body its
         true radius, theta colour) at ``time``. ``radii`` (N,) body radii; ``obstacles`` (O, 5)
-        capsules."""
+        capsules; ``headings`` (N,): a unicycle's heading, drawn as a tick from its centre."""
         pg = self.pygame
         surf = self.surface
         surf.fill(BACKGROUND)
@@ -128,6 +129,9 @@ class Renderer:
             surf.blit(halo, (int(p[0]) - r_px - 1, int(p[1]) - r_px - 1))
             pg.draw.circle(surf, c, (int(p[0]), int(p[1])), r_px, 2)  # the body, its radius
             pg.draw.circle(surf, c, (int(p[0]), int(p[1])), max(2, r_px // 4))
+            if headings is not None:
+                tip = p + r_px * np.array([np.cos(headings[i]), -np.sin(headings[i])])
+                pg.draw.line(surf, c, (int(p[0]), int(p[1])), (int(tip[0]), int(tip[1])), 2)
         # short lines, so that narrow arenas (the ramp merge) show them whole
         top = ([] if time is None else [f"t = {time:.2f} s"]) + self.caption.split(", ")
         for k, text in enumerate(t for t in top if t):

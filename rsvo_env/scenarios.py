@@ -252,16 +252,17 @@ class Crowd(Scenario):
 
 
 from rsvo_env.scenes import Doorway, ObstacleField, Scene  # noqa: E402  (they build on Scenario)
+from rsvo_env.unicycle_crowd import UnicycleCrowd  # noqa: E402  (it builds on Crowd)
 
 SCENARIOS: dict[str, type[Scenario]] = {
     cls.name: cls for cls in (PositionSwap, CircularSwap, RampMerge, Crowd, Scene, Doorway,
-                              ObstacleField)
+                              ObstacleField, UnicycleCrowd)
 }  # fmt: skip
 
 
 def make_scenario(scenario: str | Scenario, **kwargs: Any) -> Scenario:
     """A scenario by name (``position_swap``, ``circular_swap``, ``ramp_merge``, ``crowd``,
-    ``custom``, ``doorway``, ``obstacle_field``)."""
+    ``custom``, ``doorway``, ``obstacle_field``, ``unicycle_crowd``)."""
     if isinstance(scenario, Scenario):
         if kwargs:
             raise TypeError("keyword arguments go to the scenario's constructor, not here")

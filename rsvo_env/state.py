@@ -47,6 +47,8 @@ class State:
     obstacles: NDArray[np.float64]
     # (E, N) rsvo_env.clearance.contact where bodies differ or obstacles stand, else None
     contact: NDArray[np.float64] | None = None
+    # (E, N) headings (radians), for a model that has them (the unicycle)
+    headings: NDArray[np.float64] | None = None
 
     @classmethod
     def empty(cls, num_envs: int, n: int, k: int, num_obstacles: int = 0) -> State:
@@ -65,6 +67,7 @@ class State:
             reached=np.zeros((E, n), dtype=bool),
             weighting=["asymmetric"] * E,
             obstacles=np.zeros((E, num_obstacles, 5)),
+            headings=np.zeros((E, n)),
         )
 
 

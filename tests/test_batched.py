@@ -27,8 +27,10 @@ def stacked(obs, agents):
 
 
 @pytest.mark.parametrize(
-    "name", ["position_swap", "circular_swap", "ramp_merge", "crowd", "doorway", "obstacle_field"]
-)
+    "name",
+    ["position_swap", "circular_swap", "ramp_merge", "crowd", "doorway", "obstacle_field",
+     "unicycle_crowd"],
+)  # fmt: skip
 @pytest.mark.parametrize("filtered", [False, True], ids=["bare", "filtered"])
 def test_batch_equals_single_envs_bit_for_bit(name, filtered):
     # several episode ends, and so auto-resets, in 300 steps

@@ -15,6 +15,7 @@ SMALL = {
     "crowd": {"num_agents": 5, "max_steps": 300},
     "doorway": {"num_agents": 4, "max_steps": 300},
     "obstacle_field": {"num_agents": 4, "num_circles": 4, "max_steps": 300},
+    "unicycle_crowd": {"num_agents": 5, "max_steps": 300},
 }
 CASES = [(name, {}) for name in SMALL] + list(SMALL.items())
 IDS = [f"{n}-{'custom' if kw else 'default'}" for n, kw in CASES]

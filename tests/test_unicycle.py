@@ -214,3 +214,34 @@ def test_holonomic_is_checked():
     with pytest.raises(ValueError, match="holonomic is for the unicycle"):
         SafetyFilter(FilterConfig()).filter(x, np.zeros((2, 2)), np.ones(2),
                                             holonomic=np.zeros(2, bool))  # fmt: skip
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_simulated_unicycle_crowd_behind_the_filter_never_touches(seed):
+    import rsvo_env
+    import wrappers
+    from rsvo_env.dynamics.unicycle import heading_vectors as e
+
+    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("unicycle_crowd", num_agents=12,
+                                                          dt=0.05, max_steps=600))  # fmt: skip
+    env.reset(seed=seed, options={"theta": np.linspace(0.5, 8.0, 12)})
+    sim = env.unwrapped.sim
+    p = sim.scenario.params
+    I, J = pairs.all_pairs(12)
+    moved = 0.0
+    while env.agents:
+        before = sim.state.positions[0].copy()
+        _, _, _, _, info = env.step(env.unwrapped.nominal_actions())
+        x = sim.state.positions[0]
+        assert np.linalg.norm(x[I] - x[J], axis=1).min() >= p["safety_radius"] * (1 - 1e-9)
+        assert all(info[a]["feasible"] and info[a]["cost"] == 0 for a in info)
+        u = np.stack([info[a]["u_safe"] for a in env.possible_agents])
+        assert (u[:, 0] >= 0).all() and (u[:, 0] <= p["u_max"]).all()
+        assert (np.abs(u[:, 1]) <= p["w_max"] * (1 + 1e-12)).all()
+        # the axle moves along its heading: a unicycle does not slide sideways
+        moved += float(np.linalg.norm(x - before, axis=1).sum())
+        h0 = sim.state.headings[0]
+        side = np.abs(((x - before) * e(h0 + np.pi / 2)).sum(1))
+        assert (side <= np.linalg.norm(x - before, axis=1) * 0.5 + 1e-12).all()
+    assert moved > 12 * 5.0
+    assert env.unwrapped.episode_metrics["n_collision_steps"] == 0

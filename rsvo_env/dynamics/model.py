@@ -68,6 +68,27 @@ class Dynamics:
         coordinates."""
         raise NotImplementedError
 
+    def advance(
+        self,
+        positions: NDArray,
+        headings: NDArray,
+        u: NDArray,
+        dt: float,
+        params: dict[str, Any],
+    ) -> tuple[NDArray, NDArray, NDArray]:
+        """A model with headings (``needs_headings``): its simulator step, positions, headings
+        and velocities after ``dt``."""
+        raise NotImplementedError
+
+    def controls(self, actions: NDArray, params: dict[str, Any]) -> NDArray:
+        """Normalised actions to the model's inputs, for a model with headings (the others:
+        the norm clipped to 1, times the limit, in the core)."""
+        raise NotImplementedError
+
+    def actions(self, controls: NDArray, params: dict[str, Any]) -> NDArray:
+        """The inverse of :meth:`controls`."""
+        raise NotImplementedError
+
     def lower(self, cfg: FilterConfig, actions: NDArray, bodies: Bodies) -> NDArray:
         """The QP's solution back in the model's inputs (inverse of :meth:`lift`'s nominal)."""
         return actions

@@ -126,6 +126,31 @@ class Unicycle(Dynamics):
             "the unicycle's state is (positions, headings): use rsvo_env.dynamics.unicycle_step"
         )
 
+    def advance(self, positions, headings, u, dt, params):
+        """The simulator's step: axle positions, headings, and each axle's mean velocity over
+        the step (what the observation reports)."""
+        p, th = unicycle_step(positions, headings, u, float(params["lookahead"]), dt)
+        return p, th, (p - positions) / dt
+
+    def controls(self, actions: NDArray, params: dict[str, Any]) -> NDArray[np.float64]:
+        """Normalised actions in [-1, 1]^2 to (v, w): ``(a_0 v_max, a_1 w_max)``, each
+        component clipped to [-1, 1] first (the action's own frame is the body's)."""
+        a = np.clip(actions, -1.0, 1.0)
+        return np.stack([a[..., 0] * params["u_max"], a[..., 1] * params["w_max"]], -1)
+
+    def actions(self, controls: NDArray, params: dict[str, Any]) -> NDArray[np.float64]:
+        """The inverse of :meth:`controls` (no clipping)."""
+        return np.stack([controls[..., 0] / params["u_max"], controls[..., 1] / params["w_max"]],
+                        -1)  # fmt: skip
+
+    def toward(self, positions, headings, velocity, params):
+        """A world velocity ``c`` for the look-ahead point as (v, w): ``v = e . c``,
+        ``w = e_perp . c / l`` (the near-identity map's inverse)."""
+        e = heading_vectors(headings)
+        along = (e * velocity).sum(-1)
+        across = e[..., 0] * velocity[..., 1] - e[..., 1] * velocity[..., 0]
+        return np.stack([along, across / params["lookahead"]], -1)
+
     def reach(self, params: dict[str, Any], limit: float, horizon: float) -> tuple[float, float]:
         return limit * horizon, limit
 
