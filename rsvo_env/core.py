@@ -224,7 +224,11 @@ class Simulator:
         command (see :meth:`set_residual`)."""
         if self.scenario.model.needs_headings:  # its actions are (v, w), in its body frame
             return self.scenario.model.controls(actions, self.scenario.params)
-        u = planar.clip_norm(actions, 1.0, self.u_max)
+        limits = self.scenario.agent_limits
+        if limits is None:
+            u = planar.clip_norm(actions, 1.0, self.u_max)
+        else:  # each agent its own bound
+            u = planar.clip_norm(actions, 1.0) * limits[:, None]
         if self.frame == "goal":
             u = planar.rotate(u, self.state.frame_angle)
         if self.residual is not None:
@@ -235,7 +239,8 @@ class Simulator:
         """Physical controls to the normalised action frame (no clipping)."""
         if self.scenario.model.needs_headings:
             return self.scenario.model.actions(controls, self.scenario.params)
-        u = controls / self.u_max
+        limits = self.scenario.agent_limits
+        u = controls / (self.u_max if limits is None else limits[:, None])
         if self.frame == "goal":
             u = planar.rotate(u, -self.state.frame_angle)
         return u
@@ -253,16 +258,15 @@ class Simulator:
 
     def _filter_bodies(self, flt: SafetyFilter) -> Bodies | None:
         """The scenario's bodies for ``flt`` (None: identical bodies, the filter's own)."""
-        if (
-            self.scenario.plain
-            or bool(np.all(self.radii == self.radii[0]))
-            and (self.radii[0] == 0.5 * flt.config.safety_radius)
-        ):
+        same = bool(np.all(self.radii == 0.5 * flt.config.safety_radius))
+        if self.scenario.plain or (same and self.scenario.agent_limits is None):
             return None
         key = id(flt)
         if key not in self._bodies:
-            radii = np.broadcast_to(self.radii, (self.num_envs, self.n))
-            self._bodies[key] = Bodies.of(flt.config, self.num_envs, self.n, radii)
+            E, n, limits = self.num_envs, self.n, self.scenario.agent_limits
+            radii = np.broadcast_to(self.radii, (E, n))
+            u = None if limits is None else np.broadcast_to(limits, (E, n))
+            self._bodies[key] = Bodies.of(flt.config, E, n, radii, u)
         return self._bodies[key]
 
     def apply_filters(

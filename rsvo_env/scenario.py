@@ -179,6 +179,11 @@ class Scenario:
         return np.full(self.num_agents, 0.5 * self.params["safety_radius"])
 
     @property
+    def agent_limits(self) -> NDArray[np.float64] | None:
+        """(N,) each agent's own input bound, or None: every agent has ``u_max``."""
+        return None
+
+    @property
     def num_obstacles(self) -> int:
         """How many obstacles (capsules) every episode has (none here)."""
         return 0
@@ -197,9 +202,12 @@ class Scenario:
 
     @property
     def plain(self) -> bool:
-        """Identical bodies (``safety_radius / 2``) and no obstacles: today's fast paths."""
-        return self.num_obstacles == 0 and bool(
-            np.all(self.radii == 0.5 * self.params["safety_radius"])
+        """Identical bodies (``safety_radius / 2``), one input bound, no obstacles: today's fast
+        paths."""
+        return (
+            self.num_obstacles == 0
+            and self.agent_limits is None
+            and bool(np.all(self.radii == 0.5 * self.params["safety_radius"]))
         )
 
     # -- what subclasses provide --------------------------------------------------------------

@@ -60,5 +60,9 @@ def check_scene_filter(scenario: Scenario, flt: SafetyFilter) -> None:
         )
     if not model.per_agent_bodies and not np.all(scenario.radii == scenario.radii[0]):
         raise ValueError(f"bodies of different radii are not available for the {model.name} yet")
+    if scenario.agent_limits is not None and not (
+        model.per_agent_bodies and model.per_agent_limits
+    ):
+        raise ValueError(f"input bounds per agent are not available for the {model.name} yet")
     if scenario.num_obstacles and type(model).obstacle_rows is Dynamics.obstacle_rows:
         raise ValueError(f"obstacles are not available for the {model.name} yet")

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env import nominal
+from rsvo_env import nominal, planar
 from rsvo_env.bodies import check_per_agent
 from rsvo_env.obstacles import Obstacles
 from rsvo_env.scenario import Scenario
@@ -57,6 +57,11 @@ class Scene(Scenario):
             raise ValueError("custom: give starts and goals, (N, 2) each")
         starts = _points(kwargs["starts"], "custom.starts", None)
         kwargs.setdefault("num_agents", len(starts))
+        # u_max: one speed limit, or one per agent (u_max is then the largest, for the bounds)
+        self._limits = None
+        if np.ndim(kwargs.get("u_max", 0.0)) == 1:
+            self._limits = check_per_agent(kwargs["u_max"], "custom.u_max", (len(starts),))
+            kwargs["u_max"] = float(self._limits.max())
         super().__init__(**kwargs)
 
     def check(self) -> None:
@@ -72,6 +77,17 @@ class Scene(Scenario):
     @property
     def radii(self) -> NDArray[np.float64]:
         return self._radii
+
+    @property
+    def agent_limits(self) -> NDArray[np.float64] | None:
+        return self._limits
+
+    def nominal(self, state, right_hand=True):
+        u = super().nominal(state, right_hand)
+        if self._limits is None:
+            return u
+        lim = self._limits[:, None]
+        return planar.clip_norm(u / lim, 1.0) * lim  # each agent's own speed limit
 
     @property
     def num_obstacles(self) -> int:

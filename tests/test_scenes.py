@@ -144,3 +144,33 @@ def test_observation_sees_the_nearest_obstacle_surfaces_and_true_gaps():
 def test_plain_scenes_keep_their_observation_layout():
     env = rsvo_env.parallel_env("crowd", num_agents=5, num_obs_neighbors=3)
     assert env.observation_space("agent_0").shape == (5 + 10 * 3,)
+
+
+def test_each_agent_keeps_its_own_speed_limit():
+    limits = [0.5, 3.0, 1.0, 2.0]
+    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("custom", **custom(u_max=limits)))
+    env.reset(seed=0)
+    lim = np.array(limits)
+    fastest = np.zeros(4)
+    while env.agents:
+        actions = {a: np.array([1.0, 0.3], np.float32) for a in env.agents}  # full throttle
+        _, _, _, _, info = env.step(actions)
+        u = np.stack([info[a]["u_safe"] for a in env.possible_agents])
+        nominal = np.stack([info[a]["u_nominal"] for a in env.possible_agents])
+        assert (np.linalg.norm(nominal, axis=1) <= lim * (1 + 1e-12)).all()
+        assert (np.abs(u) <= lim[:, None] * (1 + 1e-12)).all()
+        assert all(info[a]["cost"] == 0 for a in info)
+        fastest = np.maximum(fastest, np.linalg.norm(u, axis=1))
+    # each ran at its own limit, not the others'
+    np.testing.assert_allclose(fastest, lim, rtol=1e-6)
+    scripted = rsvo_env.parallel_env("custom", **custom(u_max=limits))
+    scripted.reset(seed=0)
+    speeds = np.linalg.norm(scripted.unwrapped.sim.nominal_controls()[0], axis=1)
+    assert (speeds <= lim * (1 + 1e-12)).all() and np.isclose(speeds, lim).any()
+
+
+def test_a_bad_speed_limit_per_agent_names_the_agent():
+    with pytest.raises(ValueError, match=r"custom.u_max\[2\] = -1.0 .*agent 2"):
+        make_scenario("custom", **custom(u_max=[1.0, 1.0, -1.0, 1.0]))
+    with pytest.raises(ValueError, match=r"custom.u_max has shape \(3,\), expected \(4,\)"):
+        make_scenario("custom", **custom(u_max=[1.0, 1.0, 1.0]))
