@@ -132,6 +132,50 @@ def body_radii(safety_radius: float | NDArray, n: int) -> NDArray[np.float64]:
     return np.ascontiguousarray(safety_radius, dtype=np.float64)
 
 
+def braking_rhs(
+    dist: NDArray,
+    dpdv: NDArray,
+    dv2: NDArray,
+    Ds: float | NDArray,
+    A: float,
+    lo: NDArray,
+    hi: NDArray,
+    gamma: float,
+    dt: float | None,
+    push: NDArray,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+    """The braking barrier's row ``-dp.(a_i - a_j) <= RHS`` of pairs (or of an agent and a
+    fixed circle, ``A = a_max``): closing speed q, h, RHS, which rows exist, and the pairs of
+    the nearly head-on window (``docs/double_integrator.md``) that need the tangential row,
+    ``push`` the most evasive push the boxes allow along dp."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = dpdv / dist
+        closing = q < 0.0
+        h = dist - Ds - np.maximum(0.0, -q) ** 2 / (2.0 * A)
+        rhs = (dv2 - q * q) - A * dist + gamma * h * A * dist / (-q)
+    if dt is None:
+        return q, h, np.where(closing, rhs, np.inf), closing, np.zeros(0, dtype=np.int64)
+    # While opening (q >= 0) h = |dp| - Ds has relative degree 1 in continuous time, so it gets
+    # no row there; a sampled system can still cross q = 0 and land at h < 0 within one step.
+    # The one-step condition h+ >= (1 - gamma dt) h, with h+ from the exact second-order
+    # expansion of |dp| under constant a, closes that gap.
+    with np.errstate(invalid="ignore"):
+        rhs_open = (dv2 - q * q) + 2.0 * dist * (q + gamma * (dist - Ds)) / dt
+    rhs = np.where(closing, rhs, rhs_open)
+    # and the sampled-data row: h at the next sample, not only its rate now
+    U = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
+    args = (dist, q, dv2, h, A, U, gamma, dt, Ds)
+    sampled = sampled_braking_rhs(*args)
+    # Nearly head-on at h ~ 0 the reversal bound E can keep full braking out of the row: there E
+    # is dropped and one more row forbids reversing the tangential speed within the step, which
+    # full braking (no tangential part) meets.
+    wt2 = np.maximum(dv2 - q * q, 0.0)
+    stuck = (sampled < -push) & (h >= 0) & (wt2 > 0)
+    if stuck.any():
+        sampled = np.where(stuck, sampled_braking_rhs(*args, reversal=False), sampled)
+    return q, h, np.minimum(rhs, sampled), np.ones(len(dist), dtype=bool), np.nonzero(stuck)[0]
+
+
 def _tangential_rows(
     k: NDArray, dp: NDArray, dv: NDArray, dist: NDArray, q: NDArray, w: NDArray, dt: float
 ) -> tuple[NDArray, NDArray, NDArray]:
@@ -195,38 +239,13 @@ def double_integrator_rows(
         a_max = float(np.min(np.minimum(-lo, hi)))
         A_brake = 2.0 * a_max
         # coincident agents divide by zero here; their NaN rows are flagged below
-        with np.errstate(divide="ignore", invalid="ignore"):
-            q = dpdv / dist
-            closing = q < 0.0
-            h = dist - safety_radius - np.maximum(0.0, -q) ** 2 / (2.0 * A_brake)
-            rhs = (dv2 - q * q) - A_brake * dist + gamma * h * A_brake * dist / (-q)
+        q, h, rhs, exists, stuck = braking_rhs(
+            dist, dpdv, dv2, safety_radius, A_brake, lo, hi, gamma, dt, push_i + push_j
+        )
         c = 1.0
-        if dt is None:
-            rhs = np.where(closing, rhs, np.inf)
-            exists = closing
-        else:
-            # While opening (q >= 0) h = |dp| - Ds has relative degree 1 in continuous time, so
-            # it gets no row there; a sampled system can still cross q = 0 and land at h < 0
-            # within one step. The one-step condition h+ >= (1 - gamma dt) h, with h+ from the
-            # exact second-order expansion of |dp| under constant a, closes that gap.
-            with np.errstate(invalid="ignore"):
-                rhs_open = (dv2 - q * q) + 2.0 * dist * (q + gamma * (dist - safety_radius)) / dt
-            rhs = np.where(closing, rhs, rhs_open)
-            # and the sampled-data row: h at the next sample, not only its rate now
-            U = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
-            args = (dist, q, dv2, h, A_brake, U, gamma, dt, safety_radius)
-            sampled = sampled_braking_rhs(*args)
-            # Nearly head-on at h ~ 0 the reversal bound E can keep full braking out of the row:
-            # there E is dropped and one more row forbids reversing the tangential speed within
-            # the step, which full braking (no tangential part) meets.
-            wt2 = np.maximum(dv2 - q * q, 0.0)
-            stuck = (sampled < -(push_i + push_j)) & (h >= 0) & (wt2 > 0)
-            if stuck.any():
-                sampled = np.where(stuck, sampled_braking_rhs(*args, reversal=False), sampled)
-                keep_sign = np.nonzero(stuck)[0]
-                tangential = _tangential_rows(keep_sign, dp, dv, dist, q, omega_pairs[:, 0], dt)
-            rhs = np.minimum(rhs, sampled)
-            exists = np.ones(len(I), dtype=bool)
+        if len(stuck):
+            keep_sign = stuck
+            tangential = _tangential_rows(keep_sign, dp, dv, dist, q, omega_pairs[:, 0], dt)
     else:
         g1 = gamma
         g2 = gamma if gamma2 is None else gamma2

@@ -15,8 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.barriers import box_support, support_within
-from rsvo_env.sampled import sampled_braking_rhs
+from rsvo_env.barriers import box_support, braking_rhs, support_within
 
 if TYPE_CHECKING:
     from rsvo_env.bodies import Bodies
@@ -57,33 +56,13 @@ def double_integrator_obstacle_rows(
     tangential = None
     if cfg.barrier == "braking":
         A = float(np.min(np.minimum(-lo, hi)))  # agent i brakes alone
-        with np.errstate(divide="ignore", invalid="ignore"):
-            q = dpdv / dist
-            closing = q < 0.0
-            h = dist - Ds - np.maximum(0.0, -q) ** 2 / (2.0 * A)
-            rhs = (dv2 - q * q) - A * dist + gamma * h * A * dist / (-q)
-        if dt is None:
-            exists = closing
-            rhs = np.where(closing, rhs, np.inf)
-        else:
-            with np.errstate(invalid="ignore"):
-                rhs_open = (dv2 - q * q) + 2.0 * dist * (q + gamma * (dist - Ds)) / dt
-            rhs = np.where(closing, rhs, rhs_open)
-            U = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
-            args = (dist, q, dv2, h, A, U, gamma, dt, Ds)
-            sampled = sampled_braking_rhs(*args)
-            wt2 = np.maximum(dv2 - q * q, 0.0)
-            stuck = (sampled < -push) & (h >= 0) & (wt2 > 0)
-            if stuck.any():
-                sampled = np.where(stuck, sampled_braking_rhs(*args, reversal=False), sampled)
-                k = np.nonzero(stuck)[0]
-                wt = np.sqrt(wt2[k])
-                e_t = (dv[k] - q[k, None] * dp[k] / dist[k, None]) / wt[:, None]
-                A_t, s_t = -dist[k, None] * e_t, dist[k] * wt / dt
-                push[k] = support_within(dp[k], lo, hi, A_t, s_t)
-                tangential = (k, A_t, s_t)
-            rhs = np.minimum(rhs, sampled)
-            exists = np.ones(len(dist), dtype=bool)
+        q, h, rhs, exists, k = braking_rhs(dist, dpdv, dv2, Ds, A, lo, hi, gamma, dt, push)
+        if len(k):  # the nearly head-on window: the tangential row, agent i's whole share
+            wt = np.sqrt(np.maximum(dv2[k] - q[k] ** 2, 0.0))
+            e_t = (dv[k] - q[k, None] * dp[k] / dist[k, None]) / wt[:, None]
+            A_t, s_t = -dist[k, None] * e_t, dist[k] * wt / dt
+            push[k] = support_within(dp[k], lo, hi, A_t, s_t)
+            tangential = (k, A_t, s_t)
     else:
         g2 = gamma if cfg.gamma2 is None else cfg.gamma2
         h = dist * dist - Ds**2
