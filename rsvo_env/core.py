@@ -109,8 +109,9 @@ class Simulator:
         self.weights = Weights(self.num_envs, n)  # the one writer: set_theta, set_weighting, reset
         self.rngs: list[np.random.Generator | None] = [None] * self.num_envs
         self.radii = scenario.radii  # (N,) body radii
+        self.plain = scenario.plain  # identical bodies, one bound, no obstacles: kept once
         self.state = State.empty(self.num_envs, n, self.k, scenario.num_obstacles)
-        self._bodies: dict[int, Bodies] = {}
+        self._bodies: dict[int, Bodies | None] = {}
         self.metrics = EpisodeMetrics(
             self.num_envs, n, self.dt, self.safety_radius, record_series=record_series
         )
@@ -258,11 +259,14 @@ class Simulator:
 
     def _filter_bodies(self, flt: SafetyFilter) -> Bodies | None:
         """The scenario's bodies for ``flt`` (None: identical bodies, the filter's own)."""
-        same = bool(np.all(self.radii == 0.5 * flt.config.safety_radius))
-        if self.scenario.plain or (same and self.scenario.agent_limits is None):
+        if self.plain:
             return None
         key = id(flt)
         if key not in self._bodies:
+            same = bool(np.all(self.radii == 0.5 * flt.config.safety_radius))
+            if same and self.scenario.agent_limits is None:
+                self._bodies[key] = None  # the filter's own bodies are the scene's
+                return None
             E, n, limits = self.num_envs, self.n, self.scenario.agent_limits
             radii = np.broadcast_to(self.radii, (E, n))
             u = None if limits is None else np.broadcast_to(limits, (E, n))

@@ -45,7 +45,7 @@ def derive(sim: Simulator) -> None:
     s.neighbors = idx[..., : sim.k]
     s.at_goal = sim.scenario.at_goal(s.positions, s.goals)
     s.rh_active = sim.scenario.right_hand_active(s)
-    if not sim.scenario.plain:
+    if not sim.plain:
         s.contact = contact(s.positions, sim.radii, s.obstacles)
 
 
