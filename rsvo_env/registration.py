@@ -1,7 +1,9 @@
 """The ids, in gymnasium's registry (JointControlEnv) and PettingZoo's (the filtered ParallelEnv).
 
 Entry points are strings (docs/api.md): the core names the wrappers here and nowhere
-else, and they are imported only when ``make`` is called.
+else, and they are imported only when ``make`` is called. PettingZoo has a registry from 1.27 on;
+with 1.24 to 1.26 (still pinned by some clients, e.g. AgileRL) the PettingZoo ids are not
+registered and ``rsvo_env.parallel_env`` / ``wrappers.filtered_parallel_env`` make the same envs.
 """
 
 from __future__ import annotations
@@ -10,6 +12,27 @@ import gymnasium
 import pettingzoo
 
 from rsvo_env.scenarios import SCENARIOS
+
+OLDEST_PETTINGZOO = (1, 24)
+
+
+def check_pettingzoo(version: str) -> None:
+    """Refuse a PettingZoo older than 1.24 at import, naming both versions (older ones lack the
+    ``ParallelEnv`` API this package implements)."""
+    parts = []
+    for piece in version.split(".")[:2]:
+        digits = "".join(c for c in piece if c.isdigit())
+        parts.append(int(digits) if digits else 0)
+    if tuple(parts) < OLDEST_PETTINGZOO:
+        raise ImportError(
+            f"rsvo_env needs pettingzoo >= 1.24, found pettingzoo {version}: "
+            "pip install 'pettingzoo>=1.24'"
+        )
+
+
+check_pettingzoo(pettingzoo.__version__)
+# PettingZoo 1.27 added its registry (``pettingzoo.register``, ``pettingzoo.make``)
+HAS_REGISTRY = hasattr(pettingzoo, "parallel_registry")
 
 IDS = {
     "rsvo/PositionSwap-v0": "position_swap",
@@ -32,6 +55,8 @@ def register_all() -> None:
                 kwargs=kwargs,
                 max_episode_steps=SCENARIOS[scenario].defaults["max_steps"],
             )
+        if not HAS_REGISTRY:
+            continue
         for env_type, registry, factory in (
             ("parallel", pettingzoo.parallel_registry, "filtered_parallel_env"),
             ("aec", pettingzoo.aec_registry, "filtered_aec_env"),
