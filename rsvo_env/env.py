@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from pettingzoo import ParallelEnv
 from pettingzoo.utils import BaseWrapper
 
+from rsvo_env import global_state
 from rsvo_env.factory import make_simulator
 from rsvo_env.metrics import FLAT_FIELDS, EpisodeMetrics
 from rsvo_env.rendering import TRAIL, Renderer
@@ -102,6 +103,7 @@ class RSVOParallelEnv(ParallelEnv):
         obs_space, act_space = self.sim.spaces()
         self.observation_spaces = {a: obs_space for a in self.possible_agents}
         self.action_spaces = {a: act_space for a in self.possible_agents}
+        self.state_space = global_state.space(self.sim)
         self.history: deque[NDArray[np.float64]] = deque(maxlen=None if keep_history else TRAIL)
         self.renderer: Renderer | None = None
         self.episode_metrics: dict[str, Any] | None = None
@@ -143,6 +145,14 @@ class RSVOParallelEnv(ParallelEnv):
     def add_safety_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
         """Turn on (another) filter stage of the core's step; see ``wrappers.RCBFSafetyFilter``."""
         self.sim.add_filter(flt, intervention_penalty)
+
+    def state(self) -> NDArray[np.float32]:
+        """The global state (``state_space``'s layout: every agent's position, velocity, goal,
+        theta and radius, then the obstacles; ``rsvo_env.global_state``), for a centralised
+        critic."""
+        if not self._started:
+            raise RuntimeError("call reset() before state()")
+        return global_state.values(self.sim)[0]
 
     def observation_space(self, agent: str) -> gymnasium.spaces.Box:
         return self.observation_spaces[agent]

@@ -13,12 +13,20 @@ import gymnasium
 import numpy as np
 from numpy.typing import NDArray
 
+from rsvo_env import global_state
 from rsvo_env.factory import filter_config, make_simulator, route
 from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting
 from rsvo_env.safety import SafetyFilter
 from rsvo_env.scenarios import Scenario
 from rsvo_env.validation import check_flag, check_seed, check_vectors
+
+AUTORESET_MODES = ("same_step", "next_step")
+
+
+def _rows(mask: NDArray[np.bool_], like: NDArray) -> NDArray[np.bool_]:
+    """The env mask (E,) shaped to broadcast over an array (E, ...)."""
+    return mask.reshape(mask.shape + (1,) * (like.ndim - 1))
 
 
 class BatchedEnv:
@@ -38,6 +46,12 @@ class BatchedEnv:
       the same step: ``obs`` holds their new episode's first observation, ``final_obs`` their
       last one (rows of other envs are not meaningful), and the signals and ``episode_*``
       values of this step are still those of the episode that ended.
+
+    ``autoreset_mode="next_step"`` (Gymnasium's ``AutoresetMode.NEXT_STEP``) resets an ended
+    env at the following ``step`` instead: that step ignores the env's actions and returns its
+    new episode's first observation, reward 0, not terminated, not truncated, and the signals
+    and ``episode_*`` values of the new episode; ``obs`` of the ending step is the last one, and
+    there is no ``final_obs``. An env's episodes are the same in both modes.
 
     ``action="residual"`` adds each action to the scripted nominal command (``gate_radius``,
     ``residual_right_hand``, ``residual_scale``, ``yield_radius``, ``interaction_radius``: see
@@ -62,6 +76,7 @@ class BatchedEnv:
         residual_scale: float = 1.0,
         yield_radius: float | None = None,
         interaction_radius: float | None = None,
+        autoreset_mode: str = "same_step",
         **kwargs: Any,
     ) -> None:
         """``kwargs``: the filter's ``gamma``, ``solver``, ``barrier``, ``split``,
@@ -71,6 +86,9 @@ class BatchedEnv:
         filter_kwargs = route(safety_filter, kwargs)
         if action not in ("direct", "residual"):
             raise ValueError(f"action = {action!r}; use 'direct' or 'residual'")
+        if autoreset_mode not in AUTORESET_MODES:
+            raise ValueError(f"autoreset_mode = {autoreset_mode!r}; use one of {AUTORESET_MODES}")
+        self.autoreset_mode = autoreset_mode
         # checked whatever the action mode: a bad value is refused, not ignored
         residual = Residual(
             gate_radius, residual_right_hand, residual_scale, yield_radius, interaction_radius
@@ -93,7 +111,16 @@ class BatchedEnv:
             dtype=np.float32,
         )
         self.action_space = gymnasium.spaces.Box(-1.0, 1.0, (E, N, 2), dtype=np.float32)
+        self.single_state_space = global_state.space(self.sim)
+        S = self.single_state_space
+        self.state_space = gymnasium.spaces.Box(
+            np.broadcast_to(S.low, (E, *S.shape)),
+            np.broadcast_to(S.high, (E, *S.shape)),
+            dtype=np.float32,
+        )
         self._reset_args: tuple[NDArray | None, Weighting | None] | None = None
+        # next_step mode: the envs that ended at the last step, reset at this one
+        self._pending = np.zeros(E, dtype=bool)
 
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
@@ -108,6 +135,7 @@ class BatchedEnv:
         )
         self.sim.reset(range(self.num_envs), seeds, theta, weighting)
         self._reset_args = (theta, weighting)
+        self._pending[:] = False
         obs = self.sim.observe()
         return obs, self._info(self.sim.signals(), obs, np.zeros(self.num_envs, dtype=bool))
 
@@ -118,6 +146,8 @@ class BatchedEnv:
             raise RuntimeError("call reset() before step()")
         a = check_vectors(actions, "actions", self.num_agents, lead=(self.num_envs,))
         obs, reward, terminated, truncated, signals = self.sim.step(a)
+        if self.autoreset_mode == "next_step":
+            return self._next_step(obs, reward, terminated, truncated, signals)
         done = terminated | truncated
         # the ended envs' last observations, kept before their new episode overwrites them
         final_obs = obs.copy() if done.any() else obs
@@ -129,12 +159,38 @@ class BatchedEnv:
             obs[envs] = self.sim.observe(envs)
         return obs, reward, terminated, truncated, info
 
+    def _next_step(
+        self, obs: NDArray, reward: NDArray, terminated: NDArray, truncated: NDArray, signals: dict
+    ) -> tuple[NDArray, NDArray, NDArray, NDArray, dict]:
+        """The step's results with the envs that ended last step reset instead: the core stepped
+        every env, and the rows of those envs, stepped from their last state, are replaced."""
+        pending = self._pending
+        if pending.any():
+            envs = np.flatnonzero(pending)
+            theta, weighting = self._reset_args
+            self.sim.reset(envs, [None] * len(envs), theta, weighting)
+            obs[envs] = self.sim.observe(envs)
+            reward[envs] = 0.0
+            terminated[envs] = truncated[envs] = False
+            fresh = self.sim.signals()
+            signals = {k: np.where(_rows(pending, v), fresh[k], v) for k, v in signals.items()}
+        self._pending = terminated | truncated
+        info = dict(signals)
+        info.update(self.sim.metrics.flat())
+        return obs, reward, terminated, truncated, info
+
     def _info(self, signals: dict, final_obs: NDArray, done: NDArray) -> dict[str, NDArray]:
         info = dict(signals)
         info.update(self.sim.metrics.flat())
         info["final_obs"] = final_obs
         info["_final_obs"] = done
         return info
+
+    def state(self) -> NDArray[np.float32]:
+        """Each env's global state (E, S), as ``RSVOParallelEnv.state()`` of that env."""
+        if self._reset_args is None:
+            raise RuntimeError("call reset() before state()")
+        return global_state.values(self.sim)
 
     def nominal_actions(self) -> NDArray[np.float32]:
         """The scripted controller's normalised actions (E, N, 2) for the current state."""

@@ -61,13 +61,31 @@ def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys
     assert "paired: policy - scripted" in capsys.readouterr().out
 
 
-def test_time_limit_stops_training_and_saves(tmp_path):
+def test_time_limit_stops_training_and_saves(tmp_path, capsys):
     run = tmp_path / "run"
-    args = [*SMALL, "--timesteps", "10000000", "--time-limit", "2", "--out", str(run)]
+    quiet = [a for a in SMALL if a != "--no-progress"]
+    args = [*quiet, "--timesteps", "10000000", "--time-limit", "2", "--out", str(run)]
     assert train.main(args) == 0
     summary = json.loads((run / "summary.json").read_text())
     assert summary["stopped_by_time_limit"] is True
     assert summary["agent_steps"] < 10_000_000 and (run / "model.zip").is_file()
+    # the bar follows the time limit: it passes the halfway mark and ends full, although the
+    # steps taken are a sliver of the step budget
+    frames = capsys.readouterr().err.replace("\r", "\n").splitlines()
+    shown = [float(f.split("%")[0].split()[-1]) for f in frames if "agent-steps" in f]
+    assert shown and shown[-1] == 100.0 and any(40.0 <= s <= 60.0 for s in shown)
+    assert summary["agent_steps"] / 10_000_000 < 0.05
+
+
+def test_progress_share_is_the_nearer_end_of_the_budget():
+    from training.callbacks import Progress
+
+    bar = Progress(1000, seconds=10.0)
+    assert bar.fraction(100, 1.0) == 0.1
+    assert bar.fraction(100, 5.0) == 0.5  # the time limit is nearer
+    assert bar.fraction(800, 5.0) == 0.8  # the steps are
+    assert bar.fraction(2000, 1.0) == 1.0 and bar.fraction(0, 30.0) == 1.0
+    assert Progress(1000, None).fraction(250, 1e6) == 0.25
 
 
 @pytest.mark.parametrize(

@@ -1,6 +1,7 @@
 """RLlib (the distributed extra, its own venv): the env adapter, training through the real entry
 point locally, with an env runner, on a two-node Ray cluster, and the Tune sweep."""
 
+import csv
 import json
 import os
 import subprocess
@@ -45,6 +46,8 @@ def test_adapter_passes_rllibs_checker_and_equals_the_parallel_env():
         obs, rew, term, trunc, _ = env.step(acts)
         ref_obs, ref_rew, *_ = ref.step(acts)
         assert all(np.array_equal(obs[a], ref_obs[a]) and rew[a] == ref_rew[a] for a in obs)
+        # the global state for a centralised critic: the parallel env's, inside its space
+        assert np.array_equal(env.state(), ref.state()) and env.state_space.contains(env.state())
         if term["__all__"] or trunc["__all__"]:
             assert env.agents == [] and len(term) == len(obs) + 1
             break
@@ -58,8 +61,13 @@ def run_train(tmp_path, capsys, *extra):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["engine"] == "rllib" and summary["agent_steps"] >= 2048
     assert summary["validation"]["collisions"] == 0
-    for name in ("config.yaml", "progress.csv", "checkpoint", "best_checkpoint"):
+    for name in ("config.yaml", "progress.csv", "validation.csv", "checkpoint", "best_checkpoint"):
         assert (out / name).exists(), name
+    # validation.csv as the SB3 path writes it: a row per validation, no collision in any
+    with open(out / "validation.csv") as f:
+        validations = list(csv.DictReader(f))
+    assert validations and {"timesteps", "success_rate", "collisions"} <= set(validations[0])
+    assert all(int(v["collisions"]) == 0 for v in validations)
     assert evaluate.main([str(out / "checkpoint"), "--episodes", "4", "--compare-scripted"]) == 0
     report = json.loads((out / "evaluation.json").read_text())
     assert report["policy"]["collisions"] == 0 and report["policy"]["episodes"] == 4

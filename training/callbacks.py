@@ -3,7 +3,6 @@ validation on held-out seeds, and a wall-clock budget."""
 
 from __future__ import annotations
 
-import csv
 import time
 from pathlib import Path
 from typing import Any
@@ -12,6 +11,7 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
 from training.evaluation import (
+    append_validation,
     intervened,
     model_policy,
     run_episodes,
@@ -100,19 +100,59 @@ class Validation(BaseCallback):
         stats = summarize(run_episodes(self.cfg, policy, self.episodes, self.seed))
         for key in ("success_rate", "completion_time", "collisions", "infeasible", "return"):
             self.logger.record(f"eval/{key}", stats[key])
-        path = self.out / "validation.csv"
-        row = {"timesteps": self.num_timesteps, **stats}
-        new = not path.exists()
-        with open(path, "a", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(row))
-            if new:
-                writer.writeheader()
-            writer.writerow(row)
+        append_validation(self.out / "validation.csv", self.num_timesteps, stats)
         score = validation_score(stats)
         if self.best is None or score > self.best:
             self.best = score
             self.model.save(self.out / "best_model.zip")
         return stats
+
+
+class Progress(BaseCallback):
+    """A progress bar over the run's budget, whichever part ends it: the share done is the
+    larger of the agent-steps taken over ``timesteps`` and the seconds spent over ``seconds``
+    (the ``--time-limit``), so the bar fills exactly when training stops and its time left is
+    the nearer of the two ends. (SB3's own bar counts steps only.)"""
+
+    def __init__(self, timesteps: int, seconds: float | None, file: Any = None) -> None:
+        super().__init__()
+        self.timesteps, self.seconds, self.file = int(timesteps), seconds, file
+        self.start = time.perf_counter()
+        self.bar: Any = None
+        self.shown = 0.0
+
+    def fraction(self, steps: int, elapsed: float) -> float:
+        """The share of the budget used after ``steps`` agent-steps and ``elapsed`` seconds."""
+        used = steps / self.timesteps
+        if self.seconds is not None:
+            used = max(used, elapsed / self.seconds)
+        return min(used, 1.0)
+
+    def _on_training_start(self) -> None:
+        from tqdm.auto import tqdm
+
+        self.start = time.perf_counter()
+        self.bar = tqdm(total=100.0, unit="%", file=self.file, bar_format=(
+            "{percentage:5.1f}%|{bar}| {desc} [{elapsed}<{remaining}]"
+        ))  # fmt: skip
+
+    def _on_step(self) -> bool:
+        self._show(self.num_timesteps)
+        return True
+
+    def _show(self, steps: int, done: float | None = None) -> None:
+        if done is None:
+            done = 100.0 * self.fraction(steps, time.perf_counter() - self.start)
+        if done - self.shown >= 0.1 or done >= 100.0:
+            self.bar.update(done - self.shown)
+            self.shown = done
+            limit = "" if self.seconds is None else f", limit {self.seconds:g} s"
+            self.bar.set_description_str(f"{steps:,}/{self.timesteps:,} agent-steps{limit}")
+
+    def _on_training_end(self) -> None:
+        # training ends when the steps or the time run out: the budget is used up either way
+        self._show(self.num_timesteps, 100.0)
+        self.bar.close()
 
 
 class TimeLimit(BaseCallback):

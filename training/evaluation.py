@@ -34,6 +34,22 @@ def validation_score(stats: dict[str, float]) -> tuple[float, float]:
     return stats["success_rate"], fastest
 
 
+def append_validation(path: Any, timesteps: int, stats: dict[str, float]) -> None:
+    """One row of ``validation.csv`` (header on the first): the agent-steps so far and the
+    validation's statistics; the same file from the SB3 and the RLlib paths."""
+    import csv
+    from pathlib import Path
+
+    path = Path(path)
+    row = {"timesteps": int(timesteps), **stats}
+    new = not path.exists()
+    with open(path, "a", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(row))
+        if new:
+            writer.writeheader()
+        writer.writerow(row)
+
+
 def model_policy(model: Any) -> Policy:
     """A Stable-Baselines3 model's deterministic action for every agent (parameter sharing)."""
 

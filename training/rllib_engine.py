@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from training import config as configs
-from training.evaluation import run_episodes, summarize, validation_score
+from training.evaluation import append_validation, run_episodes, summarize, validation_score
 
 SHARED = "shared"
 
@@ -183,7 +183,8 @@ def keep_best(
 
 
 class Log:
-    """``progress.csv`` (and TensorBoard events when ``tensorboard`` is installed)."""
+    """``progress.csv`` (and TensorBoard events when ``tensorboard`` is installed), and
+    ``validation.csv`` as the SB3 path writes it."""
 
     FIELDS = (
         "agent_steps", "seconds", "episode_return_mean", "success_rate", "completion_time",
@@ -192,6 +193,7 @@ class Log:
     )  # fmt: skip
 
     def __init__(self, out: Path) -> None:
+        self.out = out
         self.file = open(out / "progress.csv", "w", newline="")  # noqa: SIM115
         self.writer = csv.DictWriter(self.file, fieldnames=self.FIELDS)
         self.writer.writeheader()
@@ -229,6 +231,7 @@ class Log:
         )
 
     def validation(self, steps: int, stats: dict[str, float]) -> None:
+        append_validation(self.out / "validation.csv", steps, stats)
         self.write(
             {
                 "agent_steps": steps,

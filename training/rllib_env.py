@@ -2,7 +2,8 @@
 
 Built from a training config (the same YAML as the SB3 path: scenario, filter, residual or direct
 actions, weighting). It adapts our PettingZoo ParallelEnv directly (no SuperSuit, no RLlib
-PettingZoo wrapper): agents, spaces, and per-agent infos with the filter's signals and the
+PettingZoo wrapper): agents, spaces, the global state (``state()``, ``state_space``), and
+per-agent infos with the filter's signals and the
 running episode's ``episode_*`` values, which :mod:`training.rllib_engine` turns into metrics.
 """
 
@@ -29,6 +30,8 @@ class RSVOMultiAgentEnv(MultiAgentEnv):
         self.action_spaces = {a: self.par_env.action_space(a) for a in self.agents}
         self.observation_space = gymnasium.spaces.Dict(self.observation_spaces)
         self.action_space = gymnasium.spaces.Dict(self.action_spaces)
+        # the global state a centralised critic asks for (connectors reach it through the env)
+        self.state_space = self.par_env.state_space
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -44,6 +47,10 @@ class RSVOMultiAgentEnv(MultiAgentEnv):
         if terms["__all__"] or truncs["__all__"]:
             self.agents = []
         return obs, rewards, terms, truncs, infos
+
+    def state(self) -> Any:
+        """The global state of the running episode (``rsvo_env.global_state``)."""
+        return self.par_env.state()
 
     def close(self) -> None:
         self.par_env.close()

@@ -89,7 +89,7 @@ def train(
     from stable_baselines3.common.logger import configure
     from stable_baselines3.common.vec_env import VecMonitor
 
-    from training.callbacks import EpisodeStats, TimeLimit, Validation
+    from training.callbacks import EpisodeStats, Progress, TimeLimit, Validation
     from wrappers.sb3 import SB3VecEnv
 
     out = Path(out)
@@ -109,11 +109,13 @@ def train(
         validation,
         limit,
     ]
+    if progress:
+        callbacks.append(Progress(cfg["timesteps"], time_limit))
     if cfg["checkpoint_every"]:
         every = max(cfg["checkpoint_every"] // slots, 1)
         callbacks.append(CheckpointCallback(every, str(out / "checkpoints"), name_prefix="model"))
     start = time.perf_counter()
-    model.learn(cfg["timesteps"], callback=CallbackList(callbacks), progress_bar=progress)
+    model.learn(cfg["timesteps"], callback=CallbackList(callbacks))
     seconds = time.perf_counter() - start
     model.save(out / "model.zip")
     final = validation.validate()

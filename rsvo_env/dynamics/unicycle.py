@@ -152,7 +152,12 @@ class Unicycle(Dynamics):
         return np.stack([along, across / params["lookahead"]], -1)
 
     def reach(self, params: dict[str, Any], limit: float, horizon: float) -> tuple[float, float]:
-        return limit * horizon, limit
+        # The look-ahead point moves at |c| <= hypot(v_max, l w_max); the heading turns at
+        # most |c| / l, so the axle (l behind) moves at most 2 |c| a step on average, and stays
+        # within l of the point: 2 |c| bounds each mean-velocity component.
+        l = float(params["lookahead"])
+        speed = float(np.hypot(limit, l * float(params["w_max"])))
+        return speed * horizon + 2.0 * l, 2.0 * speed
 
 
 def rotate_rows(A: NDArray, owner: NDArray, rotation: NDArray) -> NDArray[np.float64]:
