@@ -1,11 +1,13 @@
 """PettingZoo and Gymnasium wrappers around the rsvo_env core."""
 
+from wrappers.gym_vector import GymnasiumVectorEnv
 from wrappers.joint import JointControlEnv
 from wrappers.residual import ResidualAction
 from wrappers.safety_filter import RCBFSafetyFilter, filtered_aec_env, filtered_parallel_env
 from wrappers.weighting import ResponsibilityWeighting
 
 __all__ = [
+    "GymnasiumVectorEnv",
     "JointControlEnv",
     "RCBFSafetyFilter",
     "ResidualAction",
