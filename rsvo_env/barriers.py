@@ -32,28 +32,42 @@ SPLITS = ("capability", "sign_aware", "paper")
 def support_within(
     d: NDArray, lo: NDArray, hi: NDArray, g: NDArray, s: NDArray
 ) -> NDArray[np.float64]:
-    """``max d . a`` over the box ``lo <= a <= hi`` cut by the half-plane ``g . a <= s``
-    (rows (k, 2)), taken at the polygon's vertices: the box corners inside the half-plane and
-    the half-plane's line crossing the box edges. The caller ensures the polygon is not empty.
+    """``max d . a`` over the box ``lo <= a <= hi`` ((2,), or one per row (k, 2)) cut by the
+    half-plane ``g . a <= s`` (rows (k, 2)), taken at the polygon's vertices: the box corners
+    inside the half-plane and the half-plane's line crossing the box edges. The caller ensures
+    the polygon is not empty.
     """
-    corners = np.array([[lo[0], lo[1]], [lo[0], hi[1]], [hi[0], lo[1]], [hi[0], hi[1]]])
-    cand = [np.broadcast_to(c, d.shape) for c in corners]
+    lo, hi = np.broadcast_to(lo, d.shape), np.broadcast_to(hi, d.shape)
+    cand = [np.stack([a[:, 0], b[:, 1]], -1) for a in (lo, hi) for b in (lo, hi)]
     with np.errstate(divide="ignore", invalid="ignore"):
         for axis in (0, 1):
             other = 1 - axis
-            for edge in (lo[axis], hi[axis]):
+            for edge in (lo[:, axis], hi[:, axis]):
                 t = (s - g[:, axis] * edge) / g[:, other]
                 point = np.empty_like(d)
                 point[:, axis], point[:, other] = edge, t
                 cand.append(point)
     best = np.full(len(d), -np.inf)
     # the edge points are on the line to rounding: a relative hair of slack keeps them
-    tol = 1e-12 * (np.abs(g).sum(axis=1) * float(np.max(np.abs([lo, hi]))) + np.abs(s))
+    scale = np.maximum(np.abs(lo), np.abs(hi)).max(axis=1)
+    tol = 1e-12 * (np.abs(g).sum(axis=1) * scale + np.abs(s))
     for c in cand:
         inside = (np.einsum("kd,kd->k", g, c) <= s + tol) & (c >= lo).all(axis=1)
         inside &= (c <= hi).all(axis=1) & np.isfinite(c).all(axis=1)
         best = np.where(inside, np.maximum(best, np.einsum("kd,kd->k", d, c)), best)
     return best
+
+
+def braking_capability(lo: NDArray, hi: NDArray) -> NDArray[np.float64]:
+    """The deceleration a box guarantees along any direction, ``min(-lo, hi)`` over both axes
+    (the inscribed square's half-width); boxes (..., 2)."""
+    return np.minimum(-lo, hi).min(axis=-1)
+
+
+def largest_input(lo: NDArray, hi: NDArray) -> NDArray[np.float64]:
+    """The longest input vector of a box, ``|max(|lo|, |hi|)|``; boxes (..., 2)."""
+    m = np.maximum(np.abs(lo), np.abs(hi))
+    return np.hypot(m[..., 0], m[..., 1])
 
 
 def box_support(A: NDArray, lo: NDArray, hi: NDArray) -> NDArray:
@@ -137,9 +151,8 @@ def braking_rhs(
     dpdv: NDArray,
     dv2: NDArray,
     Ds: float | NDArray,
-    A: float,
-    lo: NDArray,
-    hi: NDArray,
+    A: float | NDArray,
+    U: float | NDArray,
     gamma: float,
     dt: float | None,
     push: NDArray,
@@ -147,7 +160,9 @@ def braking_rhs(
     """The braking barrier's row ``-dp.(a_i - a_j) <= RHS`` of pairs (or of an agent and a
     fixed circle, ``A = a_max``): closing speed q, h, RHS, which rows exist, and the pairs of
     the nearly head-on window (``docs/double_integrator.md``) that need the tangential row,
-    ``push`` the most evasive push the boxes allow along dp."""
+    ``push`` the most evasive push the boxes allow along dp. ``A``: the pair's braking
+    capability ``a_i + a_j``; ``U``: half the largest relative acceleration,
+    ``(|U_i| + |U_j|) / 2``; each a number or one per pair."""
     with np.errstate(divide="ignore", invalid="ignore"):
         q = dpdv / dist
         closing = q < 0.0
@@ -163,7 +178,6 @@ def braking_rhs(
         rhs_open = (dv2 - q * q) + 2.0 * dist * (q + gamma * (dist - Ds)) / dt
     rhs = np.where(closing, rhs, rhs_open)
     # and the sampled-data row: h at the next sample, not only its rate now
-    U = float(np.hypot(*np.maximum(np.abs(lo), np.abs(hi))))
     args = (dist, q, dv2, h, A, U, gamma, dt, Ds)
     sampled = sampled_braking_rhs(*args)
     # Nearly head-on at h ~ 0 the reversal bound E can keep full braking out of the row: there E
@@ -203,8 +217,13 @@ def double_integrator_rows(
     gamma2: float | None = None,
     dt: float | None = None,
     cull: bool = True,
+    radii: NDArray | None = None,
 ) -> Rows:
     """Rows for the double integrator (``docs/double_integrator.md``).
+
+    ``lo``, ``hi``: one box (2,) or one per agent (n, 2); ``radii`` (n,): body radii, a pair
+    safe at ``Ds = r_i + r_j`` (None: ``safety_radius`` for every pair). With boxes of their
+    own, ``A = a_i + a_j`` (each agent's guaranteed deceleration) and ``U = (U_i + U_j) / 2``.
 
     ``barrier="braking"``: ``h = |dp| - Ds - max(0, -q)^2 / (2 A)`` with ``A = 2 a_max`` and
     ``q = dp.dv/|dp|``; ``c = 1``; while closing (``q < 0``)
@@ -233,14 +252,19 @@ def double_integrator_rows(
     dpdv = np.einsum("ij,ij->i", dp, dv)
     dv2 = np.einsum("ij,ij->i", dv, dv)
     keep_sign = np.zeros(0, dtype=np.int64)  # pairs that get the tangential row (below)
+    # each agent's box: one for all, or one each
+    own = np.ndim(lo) == 2
+    lo_i, hi_i = (lo[I], hi[I]) if own else (lo, hi)
+    lo_j, hi_j = (lo[J], hi[J]) if own else (lo, hi)
+    Ds = safety_radius if radii is None else radii[I] + radii[J]
     # each agent's most evasive push along dp over its box: max dp.a_i, max -dp.a_j
-    push_i, push_j = box_support(dp, lo, hi), box_support(-dp, lo, hi)
+    push_i, push_j = box_support(dp, lo_i, hi_i), box_support(-dp, lo_j, hi_j)
     if barrier == "braking":
-        a_max = float(np.min(np.minimum(-lo, hi)))
-        A_brake = 2.0 * a_max
+        A_brake = braking_capability(lo_i, hi_i) + braking_capability(lo_j, hi_j)
+        U = 0.5 * (largest_input(lo_i, hi_i) + largest_input(lo_j, hi_j))
         # coincident agents divide by zero here; their NaN rows are flagged below
         q, h, rhs, exists, stuck = braking_rhs(
-            dist, dpdv, dv2, safety_radius, A_brake, lo, hi, gamma, dt, push_i + push_j
+            dist, dpdv, dv2, Ds, A_brake, U, gamma, dt, push_i + push_j
         )
         c = 1.0
         if len(stuck):
@@ -249,7 +273,7 @@ def double_integrator_rows(
     else:
         g1 = gamma
         g2 = gamma if gamma2 is None else gamma2
-        h = dist * dist - safety_radius**2
+        h = dist * dist - Ds**2
         rhs = 2.0 * dv2 + 2.0 * (g1 + g2) * dpdv + g1 * g2 * h
         c = 2.0
         exists = np.ones(len(I), dtype=bool)
@@ -269,8 +293,10 @@ def double_integrator_rows(
                 # allows along dp without breaking its share of that row, so the share it is
                 # given never needs a corner the row forbids (docs/double_integrator.md)
                 k, (A_t, s_ti, s_tj) = keep_sign, tangential
-                cap_i[k] = support_within(dp[k], lo, hi, A_t, s_ti)
-                cap_j[k] = support_within(-dp[k], lo, hi, -A_t, s_tj)
+                cap_i[k] = support_within(dp[k], lo_i[k] if own else lo, hi_i[k] if own else hi,
+                                          A_t, s_ti)  # fmt: skip
+                cap_j[k] = support_within(-dp[k], lo_j[k] if own else lo, hi_j[k] if own else hi,
+                                          -A_t, s_tj)  # fmt: skip
             unrecoverable = exists & (finite_rhs < -(cap_i + cap_j))
             clipped = np.clip(s_i, -cap_i, finite_rhs + cap_j)
             capped = exists & ~unrecoverable & (clipped != s_i)
@@ -283,7 +309,7 @@ def double_integrator_rows(
     if bad.any():
         A_i = np.where(bad[:, None], 0.0, A_i)
         s_i, s_j = np.where(bad, -1.0, s_i), np.where(bad, -1.0, s_j)
-        h = np.where(bad, -safety_radius, h)
+        h = np.where(bad, -Ds, h)
         exists = exists | bad
     if len(keep_sign) == 0:
         return finish(n, I, J, A_i, s_i, s_j, h, lo, hi, exists, unrecoverable, capped, cull)

@@ -15,7 +15,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.barriers import box_support, braking_rhs, support_within
+from rsvo_env.barriers import (
+    box_support,
+    braking_capability,
+    braking_rhs,
+    largest_input,
+    support_within,
+)
 
 if TYPE_CHECKING:
     from rsvo_env.bodies import Bodies
@@ -46,7 +52,8 @@ def double_integrator_obstacle_rows(
     dv = np.repeat(velocities, O, axis=0)
     agent = np.repeat(np.arange(M), O)
     Ds = (bodies.radii[:, None] + caps[env, :, 4]).reshape(-1)
-    lo, hi = cfg.lo, cfg.hi
+    # each row's box: the config's, or its agent's own
+    lo, hi = (cfg.lo, cfg.hi) if bodies.uniform else (bodies.lo[agent], bodies.hi[agent])
     dist = np.linalg.norm(dp, axis=1)
     dpdv = np.einsum("ij,ij->i", dp, dv)
     dv2 = np.einsum("ij,ij->i", dv, dv)
@@ -55,13 +62,16 @@ def double_integrator_obstacle_rows(
     A_i = -dp
     tangential = None
     if cfg.barrier == "braking":
-        A = float(np.min(np.minimum(-lo, hi)))  # agent i brakes alone
-        q, h, rhs, exists, k = braking_rhs(dist, dpdv, dv2, Ds, A, lo, hi, gamma, dt, push)
+        A = braking_capability(lo, hi)  # agent i brakes alone
+        U = largest_input(lo, hi)
+        q, h, rhs, exists, k = braking_rhs(dist, dpdv, dv2, Ds, A, U, gamma, dt, push)
         if len(k):  # the nearly head-on window: the tangential row, agent i's whole share
             wt = np.sqrt(np.maximum(dv2[k] - q[k] ** 2, 0.0))
             e_t = (dv[k] - q[k, None] * dp[k] / dist[k, None]) / wt[:, None]
             A_t, s_t = -dist[k, None] * e_t, dist[k] * wt / dt
-            push[k] = support_within(dp[k], lo, hi, A_t, s_t)
+            push[k] = support_within(
+                dp[k], lo if bodies.uniform else lo[k], hi if bodies.uniform else hi[k], A_t, s_t
+            )
             tangential = (k, A_t, s_t)
     else:
         g2 = gamma if cfg.gamma2 is None else cfg.gamma2

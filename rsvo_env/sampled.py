@@ -14,8 +14,8 @@ def sampled_braking_rhs(
     q: NDArray,
     dv2: NDArray,
     h: NDArray,
-    A: float,
-    U: float,
+    A: float | NDArray,
+    U: float | NDArray,
     gamma: float,
     dt: float,
     safety_radius: float | NDArray,
@@ -36,18 +36,21 @@ def sampled_braking_rhs(
     tangential speed (:func:`double_integrator_rows` adds the row that forbids it).
     """
     out = np.empty(len(dist))
-    # one distance for every pair, or one each (obstacles: r_i + rho_o)
-    Ds = np.ascontiguousarray(np.broadcast_to(np.asarray(safety_radius, float), dist.shape))
-    _sampled(dist, q, dv2, h, A, U, gamma, dt, Ds, reversal, out)
+
+    def each(value: float | NDArray) -> NDArray[np.float64]:
+        # one value for every pair, or one each (bodies and boxes of their own, obstacles)
+        return np.ascontiguousarray(np.broadcast_to(np.asarray(value, float), dist.shape))
+
+    _sampled(dist, q, dv2, h, each(A), each(U), gamma, dt, each(safety_radius), reversal, out)
     return out
 
 
 @njit(cache=True)
-def _sampled(dist, q, dv2, h, A, U, gamma, dt, safety_radius, reversal, out):
+def _sampled(dist, q, dv2, h, A_, U_, gamma, dt, safety_radius, reversal, out):
     """:func:`sampled_braking_rhs`, one pair at a time (NaN in, NaN out)."""
-    window2 = (2.0 * U * dt) ** 2
     for p in range(dist.shape[0]):
-        d, qp = dist[p], q[p]
+        d, qp, A, U = dist[p], q[p], A_[p], U_[p]
+        window2 = (2.0 * U * dt) ** 2
         wt2 = max(dv2[p] - qp * qp, 0.0)
         R_low = d + dt * qp - dt * dt * U  # the smallest R over the box (|alpha_r| <= 2 U)
         if R_low > 0:

@@ -44,24 +44,41 @@ def _points(value: Any, name: str, n: int | None) -> NDArray[np.float64]:
 class Scene(Scenario):
     """The user's own scene from arrays: ``starts``, ``goals`` (N, 2), ``radii`` (N,) body
     radii (default ``safety_radius / 2``), obstacles (``circles`` (C, 3), ``walls`` (W, 2, 2) of
-    ``thickness``). Validated on construction: an overlapping start, a start or goal inside an
+    ``thickness``), ``dynamics`` ``"single_integrator"`` (``u_max`` the speed limit, one or one
+    per agent) or ``"double_integrator"`` (``a_max`` the acceleration limit, one or one per
+    agent; the scripted controller tracks the move-to-goal velocity of speed ``u_max`` with gain
+    ``k_v``). Validated on construction: an overlapping start, a start or goal inside an
     obstacle raises naming the agent."""
 
     name = "custom"
     defaults = {**BASE, "num_agents": 2, "starts": None, "goals": None, "radii": None,
-                "circles": None, "walls": None, "thickness": 0.1}  # fmt: skip
+                "circles": None, "walls": None, "thickness": 0.1,
+                "dynamics": "single_integrator", "a_max": 1.0, "k_v": 2.0}  # fmt: skip
     nonnegative = (*Scenario.nonnegative, "thickness")
+    positive = (*Scenario.positive, "u_max", "k_v")
+    MODELS = ("single_integrator", "double_integrator")
 
     def __init__(self, **kwargs: Any) -> None:
         if kwargs.get("starts") is None or kwargs.get("goals") is None:
             raise ValueError("custom: give starts and goals, (N, 2) each")
         starts = _points(kwargs["starts"], "custom.starts", None)
         kwargs.setdefault("num_agents", len(starts))
-        # u_max: one speed limit, or one per agent (u_max is then the largest, for the bounds)
+        name = kwargs.get("dynamics", "single_integrator")
+        if name not in self.MODELS:
+            raise ValueError(
+                f"custom.dynamics = {name!r}; use one of {self.MODELS} (unicycles: the "
+                "unicycle_crowd scenario)"
+            )
+        self.dynamics = name  # this scene's model (the class's is the default)
+        if name == "single_integrator" and "a_max" in kwargs:
+            raise TypeError("custom.a_max is the double integrator's: give dynamics too")
+        # the input bound: one, or one per agent (the parameter is then the largest, for the
+        # bounds); the single integrator's is u_max, the double integrator's a_max
+        limit = "u_max" if name == "single_integrator" else "a_max"
         self._limits = None
-        if np.ndim(kwargs.get("u_max", 0.0)) == 1:
-            self._limits = check_per_agent(kwargs["u_max"], "custom.u_max", (len(starts),))
-            kwargs["u_max"] = float(self._limits.max())
+        if np.ndim(kwargs.get(limit, 0.0)) == 1:
+            self._limits = check_per_agent(kwargs[limit], f"custom.{limit}", (len(starts),))
+            kwargs[limit] = float(self._limits.max())
         super().__init__(**kwargs)
 
     def check(self) -> None:
@@ -72,6 +89,10 @@ class Scene(Scenario):
         if p["radii"] is not None:
             self._radii = check_per_agent(p["radii"], "custom.radii", (n,))
         self._obstacles = Obstacles.of(p["circles"], p["walls"], p["thickness"])
+        if self.dynamics == "double_integrator" and p["walls"] is not None and len(p["walls"]):
+            raise ValueError(
+                "custom: walls are not available for the double_integrator yet (circles are)"
+            )
         check_scene(self, self._starts, self._goals, self._obstacles.capsules)
 
     @property
@@ -83,6 +104,17 @@ class Scene(Scenario):
         return self._limits
 
     def nominal(self, state, right_hand=True):
+        p = self.params
+        if self.dynamics == "double_integrator":
+            # the move-to-goal velocity (speed u_max), tracked: a = k_v (v_goal - v)
+            turn = right_hand and p["deadlock_resolution"] == "right_hand"
+            v_goal = nominal.move_to_goal(
+                state.positions, state.goals, p["k"], p["u_max"],
+                state.rh_active if turn else None, p["rh_angle_deg"],
+            )  # fmt: skip
+            u = p["k_v"] * (v_goal - state.velocities)
+            lim = p["a_max"] if self._limits is None else self._limits[:, None]
+            return planar.clip_norm(u / lim, 1.0) * lim
         u = super().nominal(state, right_hand)
         if self._limits is None:
             return u

@@ -161,9 +161,9 @@ def test_per_agent_bodies_refused_where_not_supported():
     with pytest.raises(ValueError, match="u_min"):
         SafetyFilter(FilterConfig(u_min=-1.0)).filter(x, np.zeros((2, 2)), np.ones(2),
                                                       u_max=np.ones(2))  # fmt: skip
-    di = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=2.0))
-    with pytest.raises(ValueError, match="not available for the double_integrator"):
-        di.filter(x, np.zeros((2, 2)), np.ones(2), np.zeros((2, 2)), radii=np.ones(2))
+    uni = SafetyFilter(FilterConfig(dynamics="unicycle", u_max=2.0, lookahead=0.2, w_max=1.0))
+    with pytest.raises(ValueError, match="u_max per agent is not available for the unicycle"):
+        uni.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), u_max=np.ones(2))
 
 
 def test_batched_bodies_name_the_env():

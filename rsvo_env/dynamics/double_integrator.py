@@ -22,6 +22,25 @@ def double_integrator_step(
     return p + dt * v + (0.5 * dt * dt) * a, v + dt * a
 
 
+def check_sampled_pairs(dt: float, bodies: Any, I: NDArray, J: NDArray) -> None:
+    """The sampled-data bound of the braking barrier for each pair of bodies of their own:
+    ``dt^2 (A / 2 + U) < r_i + r_j`` (``A = a_i + a_j``, ``U = (U_i + U_j) / 2``), the pair's
+    version of the config's ``dt^2 (a_max + |u_max|) < safety_radius``; an error names the pair."""
+    from rsvo_env.barriers import braking_capability
+
+    a = braking_capability(bodies.lo, bodies.hi)
+    reach = 0.5 * (a[I] + a[J] + bodies.speed[I] + bodies.speed[J])
+    Ds = bodies.radii[I] + bodies.radii[J]
+    bad = dt * dt * reach >= Ds
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise ValueError(
+            f"agents {int(I[k])} and {int(J[k])}: dt^2 (A / 2 + U) = {dt * dt * reach[k]!r} >= "
+            f"r_i + r_j = {Ds[k]!r}: the sampled-data guarantee of the braking barrier needs "
+            "dt^2 (A / 2 + U) < r_i + r_j (docs/double_integrator.md)"
+        )
+
+
 class DoubleIntegrator(Dynamics):
     """The braking or HOCBF barrier rows, split by responsibility (``FilterConfig.barrier``,
     ``split``)."""
@@ -29,6 +48,7 @@ class DoubleIntegrator(Dynamics):
     name = "double_integrator"
     limit_name = "a_max"
     needs_velocities = True
+    per_agent_bodies = True
 
     def step(self, positions, velocities, u, dt):
         return double_integrator_step(positions, velocities, u, dt)
@@ -54,9 +74,15 @@ class DoubleIntegrator(Dynamics):
     def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:
         from rsvo_env import barriers
 
+        if bodies.uniform:
+            lo, hi, radii = cfg.lo, cfg.hi, None
+        else:
+            lo, hi, radii = bodies.lo, bodies.hi, bodies.radii
+            if cfg.dt is not None and cfg.barrier == "braking":
+                check_sampled_pairs(cfg.dt, bodies, I, J)
         return barriers.double_integrator_rows(
-            positions, velocities, weights, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi,
-            barrier=cfg.barrier, split=cfg.split, gamma2=cfg.gamma2, dt=cfg.dt,
+            positions, velocities, weights, I, J, cfg.gamma, cfg.safety_radius, lo, hi,
+            barrier=cfg.barrier, split=cfg.split, gamma2=cfg.gamma2, dt=cfg.dt, radii=radii,
         )  # fmt: skip
 
     def obstacle_rows(self, cfg, positions, velocities, bodies, capsules, n):
@@ -69,8 +95,10 @@ class DoubleIntegrator(Dynamics):
                 f"{int(np.nonzero(walls)[-1][0])} is a segment"
             )
         if cfg.dt is not None and cfg.barrier == "braking":
-            lo, hi = cfg.lo, cfg.hi
-            reach = float(np.min(np.minimum(-lo, hi)) + np.hypot(*np.maximum(-lo, hi)))
+            from rsvo_env.barriers import braking_capability
+
+            # the worst agent (fastest box, smallest body) against the smallest circle
+            reach = float((braking_capability(bodies.lo, bodies.hi) + bodies.speed).max())
             Ds = float(bodies.radii.min()) + float(capsules[..., 4].min())
             if cfg.dt**2 * reach >= Ds:
                 raise ValueError(
@@ -82,9 +110,21 @@ class DoubleIntegrator(Dynamics):
     def culling_radii(self, cfg, omega_floor, velocities, bodies):
         from rsvo_env import pairs
 
+        if bodies.uniform:
+            return pairs.double_integrator_radii(
+                omega_floor, velocities, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi,
+                cfg.barrier, cfg.gamma2, cfg.dt,
+            )  # fmt: skip
+        # bodies and boxes of their own: the radius of the worst pair bounds every pair's
+        # (it grows with Ds and U and shrinks with A, docs/double_integrator.md)
+        from rsvo_env.barriers import braking_capability
+
         return pairs.double_integrator_radii(
-            omega_floor, velocities, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, cfg.barrier,
-            cfg.gamma2, cfg.dt,
+            omega_floor, velocities, cfg.gamma, 2.0 * float(bodies.radii.max()), cfg.lo, cfg.hi,
+            cfg.barrier, cfg.gamma2, cfg.dt,
+            A=2.0 * float(braking_capability(bodies.lo, bodies.hi).min()),
+            U=float(bodies.speed.max()), Ds_min=2.0 * float(bodies.radii.min()),
+            a_top=float(braking_capability(bodies.lo, bodies.hi).max()),
         )  # fmt: skip
 
     def reach(self, params: dict[str, Any], limit: float, horizon: float) -> tuple[float, float]:
