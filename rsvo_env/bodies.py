@@ -54,6 +54,8 @@ class Bodies:
     # (M,) the unicycle's look-ahead distance of each agent, 0 for a holonomic agent (a single
     # integrator in a mixed crowd); None: the config's for every agent
     lookahead: NDArray[np.float64] | None = None
+    # (M,) each agent's own input bound as given (u_max per agent), None: the config's
+    limits: NDArray[np.float64] | None = None
 
     @classmethod
     def of(
@@ -71,13 +73,15 @@ class Bodies:
             r = np.full(M, 0.5 * cfg.safety_radius)
         else:
             r = np.ascontiguousarray(radii, dtype=np.float64).reshape(M)
+        limits = None
         if u_max is None:
             lo, hi = np.tile(cfg.lo, (M, 1)), np.tile(cfg.hi, (M, 1))
         else:
-            hi = np.repeat(np.asarray(u_max, dtype=np.float64).reshape(M, 1), 2, axis=1)
-            lo = -hi
+            limits = np.asarray(u_max, dtype=np.float64).reshape(M)
+            lo, hi = cfg.model.agent_boxes(cfg, limits)
         r_max = r.reshape(E, n).max(axis=1) if n else np.zeros(E)
-        return cls.made(r, lo, hi, r_max, radii is None and u_max is None)
+        made = cls.made(r, lo, hi, r_max, radii is None and u_max is None)
+        return made if limits is None else replace(made, limits=limits)
 
     @classmethod
     def made(
@@ -95,12 +99,14 @@ class Bodies:
 
     def with_holonomic(self, holonomic: NDArray, v_max: float, lookahead: float) -> Bodies:
         """A mixed crowd of unicycles: agents flagged ``holonomic`` (M,) are single integrators
-        with the box ``[-v_max, v_max]`` per component and look-ahead 0."""
+        with the box ``[-v_max, v_max]`` per component (their own bound when they have one) and
+        look-ahead 0."""
         h = holonomic[:, None]
-        lo = np.where(h, -v_max, self.lo)
-        hi = np.where(h, v_max, self.hi)
+        v = v_max if self.limits is None else self.limits[:, None]
+        lo = np.where(h, -v, self.lo)
+        hi = np.where(h, v, self.hi)
         made = Bodies.made(self.radii, lo, hi, self.r_max, False)
-        return replace(made, lookahead=np.where(holonomic, 0.0, lookahead))
+        return replace(made, lookahead=np.where(holonomic, 0.0, lookahead), limits=self.limits)
 
     def pair_distance(self, I: NDArray, J: NDArray) -> NDArray[np.float64]:
         """(P,) the safe distance ``r_i + r_j`` of the pairs (I, J)."""

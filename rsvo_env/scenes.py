@@ -70,11 +70,11 @@ class Scene(Scenario):
                 "unicycle_crowd scenario)"
             )
         self.dynamics = name  # this scene's model (the class's is the default)
-        if name == "single_integrator" and "a_max" in kwargs:
-            raise TypeError("custom.a_max is the double integrator's: give dynamics too")
         # the input bound: one, or one per agent (the parameter is then the largest, for the
         # bounds); the single integrator's is u_max, the double integrator's a_max
-        limit = "u_max" if name == "single_integrator" else "a_max"
+        limit = self.model.limit_name
+        if limit != "a_max" and "a_max" in kwargs:
+            raise TypeError("custom.a_max is the double integrator's: give dynamics too")
         self._limits = None
         if np.ndim(kwargs.get(limit, 0.0)) == 1:
             self._limits = check_per_agent(kwargs[limit], f"custom.{limit}", (len(starts),))
@@ -89,9 +89,9 @@ class Scene(Scenario):
         if p["radii"] is not None:
             self._radii = check_per_agent(p["radii"], "custom.radii", (n,))
         self._obstacles = Obstacles.of(p["circles"], p["walls"], p["thickness"])
-        if self.dynamics == "double_integrator" and p["walls"] is not None and len(p["walls"]):
+        if not self.model.walls and p["walls"] is not None and len(p["walls"]):
             raise ValueError(
-                "custom: walls are not available for the double_integrator yet (circles are)"
+                f"custom: walls are not available for the {self.model.name} yet (circles are)"
             )
         check_scene(self, self._starts, self._goals, self._obstacles.capsules)
 
@@ -105,8 +105,8 @@ class Scene(Scenario):
 
     def nominal(self, state, right_hand=True):
         p = self.params
-        if self.dynamics == "double_integrator":
-            # the move-to-goal velocity (speed u_max), tracked: a = k_v (v_goal - v)
+        if self.model.needs_velocities:
+            # an acceleration input: track the move-to-goal velocity, a = k_v (v_goal - v)
             turn = right_hand and p["deadlock_resolution"] == "right_hand"
             v_goal = nominal.move_to_goal(
                 state.positions, state.goals, p["k"], p["u_max"],

@@ -162,8 +162,8 @@ def test_per_agent_bodies_refused_where_not_supported():
         SafetyFilter(FilterConfig(u_min=-1.0)).filter(x, np.zeros((2, 2)), np.ones(2),
                                                       u_max=np.ones(2))  # fmt: skip
     uni = SafetyFilter(FilterConfig(dynamics="unicycle", u_max=2.0, lookahead=0.2, w_max=1.0))
-    with pytest.raises(ValueError, match="u_max per agent is not available for the unicycle"):
-        uni.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), u_max=np.ones(2))
+    with pytest.raises(ValueError, match=r"u_max\[1\] = 0.1 must be above lookahead \* w_max"):
+        uni.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), u_max=[1.0, 0.1])
 
 
 def test_batched_bodies_name_the_env():

@@ -148,8 +148,8 @@ def test_unicycle_config_is_checked():
         flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=[0.0, np.nan])
     with pytest.raises(ValueError, match=r"headings has shape \(3,\)"):
         flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(3))
-    with pytest.raises(ValueError, match="u_max per agent is not available for the unicycle"):
-        flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), u_max=np.ones(2))
+    with pytest.raises(ValueError, match=r"u_max\[0\] = 0.05 must be above lookahead \* w_max"):
+        flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), u_max=[0.05, 1.0])
 
 
 def test_culled_unicycle_filter_equals_all_pairs():
@@ -245,3 +245,41 @@ def test_a_simulated_unicycle_crowd_behind_the_filter_never_touches(seed):
         assert (side <= np.linalg.norm(x - before, axis=1) * 0.5 + 1e-12).all()
     assert moved > 12 * 5.0
     assert env.unwrapped.episode_metrics["n_collision_steps"] == 0
+
+
+@pytest.mark.parametrize("n,steps,scale", [(40, 150, 1.0), (200, 60, 1e-3), (200, 60, 1e3)])
+def test_unicycles_of_their_own_speed_limit(n, steps, scale):
+    """``u_max=(N,)``: each unicycle's forward speed stays within its own v_max,i through every
+    step (|w| within w_max), the single integrators of a mixed crowd within their own box, and
+    bodies never overlap."""
+    p, th, goals, theta, radii = crowd(n, 7 * n, scale)
+    rng = np.random.default_rng(n)
+    v_max = rng.uniform(0.5, 1.0, n) * V_MAX * scale
+    holo = rng.random(n) < 0.3
+    l, dt = 0.08 * scale, 0.05
+    flt = SafetyFilter(FilterConfig(dynamics="unicycle", lookahead=l, w_max=W_MAX,
+                                    u_max=V_MAX * scale, gamma=20.0, dt=dt))  # fmt: skip
+    I, J = pairs.all_pairs(n)
+    worst, slowed = np.inf, 0
+    for _ in range(steps):
+        nom = nominal(p, th, goals, l, V_MAX * scale)  # asks for more than some agents may
+        d = goals - p
+        dist = np.linalg.norm(d, axis=1, keepdims=True)
+        nom[holo] = (d / np.maximum(dist, 1e-300) * np.minimum(dist, V_MAX * scale))[holo]
+        res = flt.filter(p, nom, theta, headings=th, radii=radii, u_max=v_max, holonomic=holo)
+        assert res.feasible.all()
+        u = res.actions
+        assert (np.abs(u[holo]) <= v_max[holo, None] * (1 + 1e-12)).all()
+        v, w = inputs_through_the_step(u[~holo], l, dt)
+        assert (v >= -1e-12 * scale).all()
+        assert (v <= v_max[~holo] * (1 + 1e-12)).all()
+        assert (np.abs(w) <= W_MAX * (1 + 1e-12)).all()
+        slowed += int((v.max(axis=0) < 0.999 * V_MAX * scale).sum())
+        p_uni, th_uni = unicycle_step(p[~holo], th[~holo], u[~holo], l, dt)
+        p = p.copy()
+        p[holo] = p[holo] + dt * u[holo]
+        p[~holo], th = p_uni, th.copy()
+        th[~holo] = th_uni
+        gap = np.linalg.norm(p[I] - p[J], axis=1) / (radii[I] + radii[J])
+        worst = min(worst, float(gap.min()))
+    assert slowed > 0 and worst >= 1.0 - 1e-9

@@ -49,6 +49,7 @@ class DoubleIntegrator(Dynamics):
     limit_name = "a_max"
     needs_velocities = True
     per_agent_bodies = True
+    walls = False  # circles only: a wall needs a barrier and proof of its own
 
     def step(self, positions, velocities, u, dt):
         return double_integrator_step(positions, velocities, u, dt)

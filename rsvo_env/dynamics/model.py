@@ -37,6 +37,8 @@ class Dynamics:
     # whether its agents may each have their own body radius (rsvo_env.bodies), and box
     per_agent_bodies: ClassVar[bool] = False
     per_agent_limits: ClassVar[bool] = True
+    # whether its obstacle rows cover walls (segments), not only circles
+    walls: ClassVar[bool] = True
     # whether its state has a heading the filter needs (``SafetyFilter.filter(headings=)``)
     needs_headings: ClassVar[bool] = False
 
@@ -53,6 +55,12 @@ class Dynamics:
         """The box of the filter's QP from the configured bounds (the same, unless the model
         solves in coordinates of its own)."""
         return lo, hi
+
+    def agent_boxes(self, cfg: FilterConfig, u_max: NDArray) -> tuple[NDArray, NDArray]:
+        """Each agent's input box (M, 2) from its own bound ``u_max`` (M,), checked > 0:
+        ``[-u_max_i, u_max_i]`` per component (a model with another input box overrides it)."""
+        hi = np.repeat(np.asarray(u_max, dtype=np.float64).reshape(-1, 1), 2, axis=1)
+        return -hi, hi
 
     def lift(
         self,

@@ -63,7 +63,6 @@ class Unicycle(Dynamics):
     limit_name = "u_max"
     needs_headings = True
     per_agent_bodies = True
-    per_agent_limits = False
 
     def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
         if cfg.lookahead is None or cfg.w_max is None:
@@ -86,6 +85,21 @@ class Unicycle(Dynamics):
         b = cfg.lookahead * cfg.w_max
         v_hi = float(np.sqrt(hi[0] ** 2 - b * b))
         return np.array([0.0, -b]), np.array([v_hi, b])
+
+    def agent_boxes(self, cfg, u_max):
+        """Each agent's body-frame box from its own forward-speed limit ``v_max,i``:
+        ``0 <= v <= sqrt(v_max,i^2 - (l w_max)^2)``, ``|l w| <= l w_max`` (:meth:`box`)."""
+        b = cfg.lookahead * cfg.w_max
+        slow = u_max <= b
+        if slow.any():
+            i = int(np.argmax(slow))
+            raise ValueError(
+                f"u_max[{i}] = {float(u_max[i])!r} must be above lookahead * w_max = {b!r} "
+                f"(agent {i}: the look-ahead point's speed bounds the forward speed)"
+            )
+        v_hi = np.sqrt(u_max * u_max - b * b)
+        lo = np.stack([np.zeros_like(v_hi), np.full_like(v_hi, -b)], -1)
+        return lo, np.stack([v_hi, np.full_like(v_hi, b)], -1)
 
     def lift(self, cfg, positions, headings, nominal, bodies):
         M = len(bodies.radii)
