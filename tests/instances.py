@@ -68,3 +68,14 @@ def stack(instances: list[dict]) -> tuple[np.ndarray, ...]:
     hi = np.stack([p["hi"] for p in instances])
     mask = np.ones(b.shape, dtype=bool)
     return nominal, A, b, mask, lo, hi
+
+
+def converging_pair(rng, distance, speed):
+    """Two agents at ``distance`` (low, high) from a common point, from any angles, heading for
+    it at ``speed`` (low, high): positions and velocities (2, 2)."""
+    ang = rng.uniform(0, 2 * np.pi)
+    ang2 = ang + rng.uniform(-np.pi, np.pi)
+    d = rng.uniform(*distance, (2, 1))
+    pk = np.array([[np.cos(ang), np.sin(ang)], [np.cos(ang2), np.sin(ang2)]]) * d
+    vk = -pk / np.linalg.norm(pk, axis=1, keepdims=True) * rng.uniform(*speed, (2, 1))
+    return pk, vk

@@ -33,13 +33,13 @@ def nominal_to(goals, x, u_max):
     return d / np.maximum(dist, 1e-300) * np.minimum(dist, u_max[:, None])
 
 
-def all_pairs_actions(flt, x, nominal, theta, radii, u_max):
+def all_pairs_actions(flt, x, nominal, theta, radii, u_max, velocities=None):
     """The filter with every pair examined and no culling radius: the definition."""
     cfg, n = flt.config, len(x)
     bodies = Bodies.of(cfg, 1, n, radii[None], u_max[None])
     I, J = pairs.all_pairs(n)
     w = flt.pair_weights(theta, None, I, J)
-    rows = cfg.model.rows(cfg, x, None, w, I, J, bodies)
+    rows = cfg.model.rows(cfg, x, velocities, w, I, J, bodies)
     out = solvers.solve("exact", nominal, rows.flat_A, rows.flat_b, rows.offsets, bodies.lo,
                         bodies.hi)  # fmt: skip
     return out[0], out[1]

@@ -6,9 +6,9 @@ sampled-data bound is checked per pair and names it."""
 
 import numpy as np
 import pytest
+from instances import converging_pair
+from test_bodies import all_pairs_actions
 
-from rsvo_env import pairs, solvers
-from rsvo_env.bodies import Bodies
 from rsvo_env.dynamics import double_integrator_step
 from rsvo_env.obstacles import Obstacles
 from rsvo_env.safety import FilterConfig, SafetyFilter
@@ -31,11 +31,7 @@ def heading_in(rng, n_pairs, radii, a, scale):
     p, v = np.zeros((2 * n_pairs, 2)), np.zeros((2 * n_pairs, 2))
     k = 0
     while k < n_pairs:
-        ang = rng.uniform(0, 2 * np.pi)
-        ang2 = ang + rng.uniform(-np.pi, np.pi)
-        d = rng.uniform(3, 30, (2, 1)) * scale
-        pk = np.array([[np.cos(ang), np.sin(ang)], [np.cos(ang2), np.sin(ang2)]]) * d
-        vk = -pk / np.linalg.norm(pk, axis=1, keepdims=True) * rng.uniform(0.5, 6, (2, 1)) * scale
+        pk, vk = converging_pair(rng, (3 * scale, 30 * scale), (0.5 * scale, 6 * scale))
         s = slice(2 * k, 2 * k + 2)
         if pair_h(pk, vk, radii[s], a[s])[0][0] >= 0:
             p[s], v[s] = pk + [1e5 * scale * k, 0.0], vk
@@ -85,18 +81,6 @@ def crowd(rng, n, scale=1.0):
     return p, v, radii, a
 
 
-def all_pairs_actions(flt, p, v, nominal, theta, radii, a):
-    """The filter with every pair examined, no culling radius: the definition."""
-    cfg, n = flt.config, len(p)
-    bodies = Bodies.of(cfg, 1, n, radii[None], a[None])
-    I, J = pairs.all_pairs(n)
-    w = flt.pair_weights(theta, None, I, J)
-    rows = cfg.model.rows(cfg, p, v, w, I, J, bodies)
-    out = solvers.solve("exact", nominal, rows.flat_A, rows.flat_b, rows.offsets, bodies.lo,
-                        bodies.hi)  # fmt: skip
-    return out[0], out[1]
-
-
 @pytest.mark.parametrize("n, seed", [(60, 0), (400, 1)])
 def test_culled_equals_all_pairs(n, seed):
     rng = np.random.default_rng(seed)
@@ -110,7 +94,7 @@ def test_culled_equals_all_pairs(n, seed):
     for _ in range(8):  # a few steps in, so rows bind
         nominal = np.clip(goals - p - v, -a[:, None], a[:, None])
         res = flt.filter(p, nominal, theta, velocities=v, radii=radii, u_max=a)
-        ref, _ = all_pairs_actions(flt, p, v, nominal, theta, radii, a)
+        ref, _ = all_pairs_actions(flt, p, nominal, theta, radii, a, velocities=v)
         np.testing.assert_allclose(res.actions, ref, rtol=0, atol=1e-12 * 3.0)
         active += int(res.active.sum())
         p, v = double_integrator_step(p, v, res.actions, dt)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from instances import converging_pair
 
 import rsvo_env
 import wrappers
@@ -29,11 +30,7 @@ def pairs_heading_in(rng, n_pairs):
     p, v = np.zeros((2 * n_pairs, 2)), np.zeros((2 * n_pairs, 2))
     k = 0
     while k < n_pairs:
-        ang = rng.uniform(0, 2 * np.pi)
-        ang2 = ang + rng.uniform(-np.pi, np.pi)
-        d = rng.uniform(8, 60, (2, 1))
-        pk = np.array([[np.cos(ang), np.sin(ang)], [np.cos(ang2), np.sin(ang2)]]) * d
-        vk = -pk / np.linalg.norm(pk, axis=1, keepdims=True) * rng.uniform(2, 20, (2, 1))
+        pk, vk = converging_pair(rng, (8, 60), (2, 20))
         vk += rng.normal(scale=2.0, size=(2, 2))
         if braking_h(pk, vk, A_MAX)[0] >= 0:
             p[2 * k : 2 * k + 2], v[2 * k : 2 * k + 2] = pk + [1e5 * k, 0.0], vk

@@ -170,6 +170,14 @@ def test_culled_unicycle_filter_equals_all_pairs():
     assert bound > 0
 
 
+def step_mixed(p, th, u, holo, l, dt):
+    """One step of a mixed crowd: single integrators (holonomic) and unicycles."""
+    p, th = p.copy(), th.copy()
+    p[~holo], th[~holo] = unicycle_step(p[~holo], th[~holo], u[~holo], l, dt)
+    p[holo] = p[holo] + dt * u[holo]
+    return p, th
+
+
 @pytest.mark.parametrize("n,steps,scale", [(40, 150, 1.0), (300, 60, 1e-3), (300, 60, 1e3)])
 def test_mixed_crowds_of_single_integrators_and_unicycles(n, steps, scale):
     """Every other agent a single integrator (holonomic): bodies never overlap, the single
@@ -193,11 +201,7 @@ def test_mixed_crowds_of_single_integrators_and_unicycles(n, steps, scale):
         v, w = inputs_through_the_step(u[~holo], l, dt)
         assert (v >= -1e-12 * scale).all() and (v <= V_MAX * scale * (1 + 1e-12)).all()
         assert (np.abs(w) <= W_MAX * (1 + 1e-12)).all()
-        p_uni, th_uni = unicycle_step(p[~holo], th[~holo], u[~holo], l, dt)
-        p = p.copy()
-        p[holo] = p[holo] + dt * u[holo]
-        p[~holo], th = p_uni, th.copy()
-        th[~holo] = th_uni
+        p, th = step_mixed(p, th, u, holo, l, dt)
         gap = np.linalg.norm(p[I] - p[J], axis=1) / (radii[I] + radii[J])
         worst = min(worst, float(gap.min()))
     assert 1.0 - 1e-9 <= worst < 1.5
@@ -275,11 +279,7 @@ def test_unicycles_of_their_own_speed_limit(n, steps, scale):
         assert (v <= v_max[~holo] * (1 + 1e-12)).all()
         assert (np.abs(w) <= W_MAX * (1 + 1e-12)).all()
         slowed += int((v.max(axis=0) < 0.999 * V_MAX * scale).sum())
-        p_uni, th_uni = unicycle_step(p[~holo], th[~holo], u[~holo], l, dt)
-        p = p.copy()
-        p[holo] = p[holo] + dt * u[holo]
-        p[~holo], th = p_uni, th.copy()
-        th[~holo] = th_uni
+        p, th = step_mixed(p, th, u, holo, l, dt)
         gap = np.linalg.norm(p[I] - p[J], axis=1) / (radii[I] + radii[J])
         worst = min(worst, float(gap.min()))
     assert slowed > 0 and worst >= 1.0 - 1e-9
