@@ -24,7 +24,6 @@ if TYPE_CHECKING:
 
 AGENT_FIELDS = ("x", "y", "vx", "vy", "goal_x", "goal_y", "theta", "radius")
 HEADING_FIELD = "heading"
-OBSTACLE_FIELDS = ("x0", "y0", "x1", "y1", "radius")
 
 
 def agent_fields(sim: Simulator) -> tuple[str, ...]:

@@ -228,13 +228,18 @@ class Scenario:
     def nominal(self, state: Any, right_hand: bool = True) -> NDArray[np.float64]:
         """Scripted nominal controls (E, N, 2) in physical units: move-to-goal (paper, Sec. V-A)
         plus the right-hand rule (unless ``right_hand`` is False)."""
+        return self.move_to_goal(state, right_hand, self.u_max)
+
+    def move_to_goal(self, state: Any, right_hand: bool, speed: float) -> NDArray[np.float64]:
+        """The move-to-goal velocity of norm at most ``speed``, turned by the right-hand rule
+        where it is on (unless ``right_hand`` is False)."""
         p = self.params
         turn = right_hand and p["deadlock_resolution"] == "right_hand"
         return nominal.move_to_goal(
             state.positions,
             state.goals,
             p["k"],
-            self.u_max,
+            speed,
             state.rh_active if turn else None,
             p["rh_angle_deg"],
         )

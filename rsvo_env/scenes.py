@@ -107,11 +107,7 @@ class Scene(Scenario):
         p = self.params
         if self.model.needs_velocities:
             # an acceleration input: track the move-to-goal velocity, a = k_v (v_goal - v)
-            turn = right_hand and p["deadlock_resolution"] == "right_hand"
-            v_goal = nominal.move_to_goal(
-                state.positions, state.goals, p["k"], p["u_max"],
-                state.rh_active if turn else None, p["rh_angle_deg"],
-            )  # fmt: skip
+            v_goal = self.move_to_goal(state, right_hand, p["u_max"])
             u = p["k_v"] * (v_goal - state.velocities)
             lim = p["a_max"] if self._limits is None else self._limits[:, None]
             return planar.clip_norm(u / lim, 1.0) * lim

@@ -175,15 +175,18 @@ class BatchedEnv:
             fresh = self.sim.signals()
             signals = {k: np.where(_rows(pending, v), fresh[k], v) for k, v in signals.items()}
         self._pending = terminated | truncated
-        info = dict(signals)
-        info.update(self.sim.metrics.flat())
-        return obs, reward, terminated, truncated, info
+        return obs, reward, terminated, truncated, self._info(signals)
 
-    def _info(self, signals: dict, final_obs: NDArray, done: NDArray) -> dict[str, NDArray]:
+    def _info(
+        self, signals: dict, final_obs: NDArray | None = None, done: NDArray | None = None
+    ) -> dict[str, NDArray]:
+        """The signals and the running episodes' values; with ``final_obs`` (same-step mode)
+        the ended envs' last observations and their mask."""
         info = dict(signals)
         info.update(self.sim.metrics.flat())
-        info["final_obs"] = final_obs
-        info["_final_obs"] = done
+        if final_obs is not None:
+            info["final_obs"] = final_obs
+            info["_final_obs"] = done
         return info
 
     def state(self) -> NDArray[np.float32]:

@@ -5,15 +5,13 @@ reads the agents' own observations."""
 
 import pytest
 import torch
+from benchmarl.algorithms import IppoConfig, MappoConfig
+from benchmarl.environments.pettingzoo.common import PettingZooClass
+from benchmarl.experiment import Experiment, ExperimentConfig
+from benchmarl.models.mlp import MlpConfig
+from torchrl.envs.libs.pettingzoo import PettingZooWrapper
 
-benchmarl = pytest.importorskip("benchmarl", reason="BenchMARL is in the dev extra")
-from benchmarl.algorithms import IppoConfig, MappoConfig  # noqa: E402
-from benchmarl.environments.pettingzoo.common import PettingZooClass  # noqa: E402
-from benchmarl.experiment import Experiment, ExperimentConfig  # noqa: E402
-from benchmarl.models.mlp import MlpConfig  # noqa: E402
-from torchrl.envs.libs.pettingzoo import PettingZooWrapper  # noqa: E402
-
-from wrappers.safety_filter import filtered_parallel_env  # noqa: E402
+from wrappers.safety_filter import filtered_parallel_env
 
 AGENTS, STEPS = 4, 50
 

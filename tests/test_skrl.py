@@ -14,16 +14,14 @@ import dataclasses
 import pettingzoo
 import pytest
 import torch
+from skrl.envs.wrappers.torch import wrap_env
+from skrl.memories.torch import RandomMemory
+from skrl.models.torch import DeterministicMixin, GaussianMixin, Model
+from skrl.multi_agents.torch.ippo import IPPO, IPPO_CFG
+from skrl.multi_agents.torch.mappo import MAPPO, MAPPO_CFG
+from skrl.trainers.torch import SequentialTrainer
 
-skrl = pytest.importorskip("skrl", reason="skrl is in the dev extra")
-from skrl.envs.wrappers.torch import wrap_env  # noqa: E402
-from skrl.memories.torch import RandomMemory  # noqa: E402
-from skrl.models.torch import DeterministicMixin, GaussianMixin, Model  # noqa: E402
-from skrl.multi_agents.torch.ippo import IPPO, IPPO_CFG  # noqa: E402
-from skrl.multi_agents.torch.mappo import MAPPO, MAPPO_CFG  # noqa: E402
-from skrl.trainers.torch import SequentialTrainer  # noqa: E402
-
-import rsvo_env  # noqa: E402,F401  (registers the ids)
+import rsvo_env  # noqa: F401  (registers the ids)
 
 STEPS = 300
 

@@ -7,7 +7,9 @@ dt, speed limit and time cap, and their results pair up seed by seed.
 
 from __future__ import annotations
 
+import csv
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -37,9 +39,6 @@ def validation_score(stats: dict[str, float]) -> tuple[float, float]:
 def append_validation(path: Any, timesteps: int, stats: dict[str, float]) -> None:
     """One row of ``validation.csv`` (header on the first): the agent-steps so far and the
     validation's statistics; the same file from the SB3 and the RLlib paths."""
-    import csv
-    from pathlib import Path
-
     path = Path(path)
     row = {"timesteps": int(timesteps), **stats}
     new = not path.exists()

@@ -62,7 +62,9 @@ class DoubleIntegrator(Dynamics):
                 f"FilterConfig: the braking barrier needs u_min < 0 < u_max, got "
                 f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
             )
-        reach = float(np.min(np.minimum(-lo, hi)) + np.hypot(*np.maximum(-lo, hi)))
+        from rsvo_env.barriers import braking_capability, largest_input
+
+        reach = float(braking_capability(lo, hi) + largest_input(lo, hi))
         if cfg.dt is not None and cfg.dt**2 * reach >= cfg.safety_radius:
             # the sampled-data row divides by the gap at the next sample, which h >= 0 keeps
             # above safety_radius - dt^2 (a_max + |U|) (docs/double_integrator.md)
@@ -120,12 +122,11 @@ class DoubleIntegrator(Dynamics):
         # (it grows with Ds and U and shrinks with A, docs/double_integrator.md)
         from rsvo_env.barriers import braking_capability
 
+        a = braking_capability(bodies.lo, bodies.hi)
         return pairs.double_integrator_radii(
             omega_floor, velocities, cfg.gamma, 2.0 * float(bodies.radii.max()), cfg.lo, cfg.hi,
-            cfg.barrier, cfg.gamma2, cfg.dt,
-            A=2.0 * float(braking_capability(bodies.lo, bodies.hi).min()),
-            U=float(bodies.speed.max()), Ds_min=2.0 * float(bodies.radii.min()),
-            a_top=float(braking_capability(bodies.lo, bodies.hi).max()),
+            cfg.barrier, cfg.gamma2, cfg.dt, A=2.0 * float(a.min()), U=float(bodies.speed.max()),
+            Ds_min=2.0 * float(bodies.radii.min()), a_top=float(a.max()),
         )  # fmt: skip
 
     def reach(self, params: dict[str, Any], limit: float, horizon: float) -> tuple[float, float]:
