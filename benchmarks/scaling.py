@@ -30,7 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rsvo_env import barriers, pairs
+from rsvo_env import pairs
+from rsvo_env.bodies import Bodies
 from rsvo_env.dynamics import double_integrator_step
 from rsvo_env.neighbors import nearest_distance
 from rsvo_env.nominal import move_to_goal
@@ -115,7 +116,7 @@ class DoubleIntegrator:
 
     GAMMA, A_MAX, K_V = 2.0, 1.0, 2.0
 
-    def __init__(self, n: int, spread: bool) -> None:
+    def __init__(self, n: int, spread: bool, barrier: str = "backup") -> None:
         self.sc, self.p, self.goals = crowd_start(n)
         par = self.sc.params
         self.v = np.zeros_like(self.p)
@@ -128,6 +129,7 @@ class DoubleIntegrator:
                 u_max=self.A_MAX,
                 dt=DT,
                 dynamics="double_integrator",
+                barrier=barrier,
             )
         )
         self.agent_steps = self.infeasible = self.mismatches = self.checks = 0
@@ -159,10 +161,10 @@ class DoubleIntegrator:
         cfg = self.flt.config
         I, J = pairs.all_pairs(len(p))
         w = self.flt.pair_weights(self.theta, None, I, J)
-        rows = barriers.double_integrator_rows(
-            p, v, w, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, dt=cfg.dt
-        )
-        u, feasible = exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)[:2]
+        bodies = Bodies.of(cfg, 1, len(p))
+        rows, _ = cfg.model.filter_rows(cfg, p, v, w, I, J, bodies, None, len(p))
+        u, feasible = exact.solve_csr(nominal, rows.flat_A, rows.flat_b, rows.offsets, cfg.lo,
+                                      cfg.hi)[:2]  # fmt: skip
         same_flags = np.array_equal(feasible, res.feasible)
         return bool(same_flags and np.abs(u - res.actions).max() <= 1e-12 * self.A_MAX)
 
@@ -249,11 +251,45 @@ def fresh(mode: str, n: int, steps: int) -> dict:
     return json.loads(out.strip().splitlines()[-1])
 
 
+def double_integrator_rows(blocks: int) -> list[dict]:
+    """Section 2: each barrier's double-integrator crowd against the single integrator."""
+    di = []
+    for n in (100, 1000):
+        for barrier in ("backup", "braking"):
+            steps = 40 if n <= 100 else 10
+            sim = DoubleIntegrator(n, spread=True, barrier=barrier)
+            si = Ours(n, spread=True)
+            k = [0]
+
+            def after(sim=sim, k=k):
+                k[0] += 1
+                sim.check(all_pairs=k[0] % 20 == 0)
+
+            t = alternate({"di": sim, "si": si}, n, steps, blocks, {"di": after})
+            di.append(
+                {
+                    "n": n,
+                    "barrier": barrier,
+                    "di": t["di"],
+                    "si": t["si"],
+                    "agent_steps": sim.agent_steps,
+                    "infeasible": sim.infeasible,
+                    "checks": sim.checks,
+                    "mismatches": sim.mismatches,
+                    "min_distance": sim.min_distance,
+                }
+            )
+            print(di[-1], flush=True)
+    return di
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="N up to 1,000, fewer blocks")
     ap.add_argument("--blocks", type=int, default=7)
     ap.add_argument("--out", type=Path, default=RESULTS / "scaling.md")
+    ap.add_argument("--di-only", action="store_true",
+                    help="rerun section 2 alone and replace it in --out")  # fmt: skip
     ap.add_argument("--big", nargs=3, metavar=("MODE", "N", "STEPS"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.big:
@@ -265,7 +301,7 @@ def main(argv: list[str] | None = None) -> int:
         orca = True
     except ImportError:
         orca = False
-    sizes = [n for n in SIZES if not args.quick or n <= 1000]
+    sizes = [n for n in SIZES if not args.quick or n <= 1000] if not args.di_only else []
     rows = []
     for n in sizes:
         steps = 20  # the same stretch of the episode at every N
@@ -283,31 +319,10 @@ def main(argv: list[str] | None = None) -> int:
                 row["orca_spread" if spread else "orca"] = t["orca"]
         rows.append(row)
         print(row, flush=True)
-    di = []
-    for n in (100, 1000):
-        steps = 40 if n <= 100 else 10
-        sim = DoubleIntegrator(n, spread=True)
-        si = Ours(n, spread=True)
-        k = [0]
-
-        def after(sim=sim, k=k):
-            k[0] += 1
-            sim.check(all_pairs=k[0] % 20 == 0)
-
-        t = alternate({"di": sim, "si": si}, n, steps, args.blocks, {"di": after})
-        di.append(
-            {
-                "n": n,
-                "di": t["di"],
-                "si": t["si"],
-                "agent_steps": sim.agent_steps,
-                "infeasible": sim.infeasible,
-                "checks": sim.checks,
-                "mismatches": sim.mismatches,
-                "min_distance": sim.min_distance,
-            }
-        )
-        print(di[-1], flush=True)
+    di = double_integrator_rows(args.blocks)
+    if args.di_only:
+        report.splice_di(args.out, di, DT, DoubleIntegrator)
+        return 0
     big = [] if args.quick else [fresh("env", 10_000, 1000), fresh("arrays", 10_000, 1000)]
     report.write(args.out, rows, di, big, orca, args.blocks, DT, DoubleIntegrator)
     report.plot(rows, di, args.out.with_suffix(".png"))

@@ -25,13 +25,11 @@ def plot(rows: list[dict], di: list[dict], path: Path) -> None:
         pts = [(r["n"], r[key]) for r in rows if r.get(key)]
         if pts:
             ax.plot(*zip(*pts, strict=True), style, label=label)
-    if di:
-        ax.plot(
-            [d["n"] for d in di],
-            [d["di"] for d in di],
-            "D:",
-            label="double integrator, theta 1..10",
-        )
+    for barrier, style in (("backup", "D:"), ("braking", "x:")):
+        pts = [(d["n"], d["di"]) for d in di if d.get("barrier", "braking") == barrier]
+        if pts:
+            ax.plot(*zip(*pts, strict=True), style,
+                    label=f"double integrator, {barrier} barrier, theta 1..10")  # fmt: skip
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("agents N")
@@ -42,6 +40,59 @@ def plot(rows: list[dict], di: list[dict], path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
+
+
+def di_section(di: list, DT: float, DoubleIntegrator) -> list[str]:
+    """Section 2's lines: each barrier's cost against the single integrator's."""
+    lines = [
+        "## 2. Double-integrator crowds (theta 1..10)",
+        "",
+        f"Acceleration box |a_k| <= {DoubleIntegrator.A_MAX}, gamma = {DoubleIntegrator.GAMMA},"
+        f" dt = {DT}, no user `neighbor_radius` (each agent's radius comes from the speeds and"
+        " the box); the backup barrier (the default, `docs/double_integrator.md`) and the"
+        " braking barrier with the capability split. Nominal: a = 2 (v_des - v) with v_des the"
+        " move-to-goal command. Against the single integrator on the same crowd and theta in"
+        " the same run, blocks alternating. Every 20th step the actions and flags are"
+        " recomputed with all pairs. Rerun this section alone:"
+        " `python benchmarks/scaling.py --di-only`.",
+        "",
+        "| N | barrier | double integrator [µs] | single integrator [µs] | ratio |"
+        " infeasible agent-steps | all-pairs checks (mismatches) | min distance [m] |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for d in di:
+        share = d["infeasible"] / max(d["agent_steps"], 1)
+        lines.append(
+            f"| {d['n']:,} | {d['barrier']} | {d['di']:.2f} | {d['si']:.2f} | "
+            f"{d['di'] / d['si']:.1f}x | "
+            f"{d['infeasible']:,} of {d['agent_steps']:,} ({100 * share:.2f} %) | "
+            f"{d['checks']} ({d['mismatches']}) | {d['min_distance']:.4f} |"
+        )
+    return lines
+
+
+def section_one(text: str) -> list[dict]:
+    """Section 1's figures read back from a results file (for the plot of a section-2 rerun)."""
+    rows = []
+    body = text[text.index("## 1. ") : text.index("## 2. ")]
+    for line in body.splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if len(cells) == 9 and cells[0].replace(",", "").isdigit():
+            num = [float(c) if c.replace(".", "").isdigit() else None for c in cells]
+            rows.append({"n": int(cells[0].replace(",", "")), "ours_equal": num[2],
+                         "orca": num[3], "ours_spread": num[5]})  # fmt: skip
+    return rows
+
+
+def splice_di(path: Path, di: list, DT: float, DoubleIntegrator) -> None:
+    """Replace section 2 of an existing results file with a new run of it, and redraw the
+    figure with section 1 as it stands."""
+    text = path.read_text()
+    plot(section_one(text), di, path.with_suffix(".png"))
+    start = text.index("## 2. ")
+    end = text.find("\n## 3. ", start)
+    tail = "" if end < 0 else text[end:]
+    path.write_text(text[:start] + "\n".join(di_section(di, DT, DoubleIntegrator)) + "\n" + tail)
 
 
 def write(
@@ -97,28 +148,7 @@ def write(
             f"{at[30_000]['ours_equal'] / at[1000]['ours_equal']:.2f}x, theta 1..10 "
             f"{at[30_000]['ours_spread'] / at[1000]['ours_spread']:.2f}x.",
         ]
-    lines += [
-        "",
-        "## 2. Double-integrator crowds (theta 1..10)",
-        "",
-        f"Acceleration box |a_k| <= {DoubleIntegrator.A_MAX}, braking barrier, capability split,"
-        f" gamma = {DoubleIntegrator.GAMMA}, dt = {DT}, no user `neighbor_radius` (each agent's"
-        " radius comes from the closing speeds and the box). Nominal: a = 2 (v_des - v) with"
-        " v_des the move-to-goal command. Against the single integrator on the same crowd and"
-        " theta in the same run. Every 20th step the actions and flags are recomputed with all"
-        " pairs.",
-        "",
-        "| N | double integrator [µs] | single integrator [µs] | ratio | infeasible agent-steps"
-        " | all-pairs checks (mismatches) | min distance [m] |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for d in di:
-        share = d["infeasible"] / max(d["agent_steps"], 1)
-        lines.append(
-            f"| {d['n']:,} | {d['di']:.2f} | {d['si']:.2f} | {d['di'] / d['si']:.1f}x | "
-            f"{d['infeasible']:,} of {d['agent_steps']:,} ({100 * share:.2f} %) | "
-            f"{d['checks']} ({d['mismatches']}) | {d['min_distance']:.4f} |"
-        )
+    lines += ["", *di_section(di, DT, DoubleIntegrator)]
     if big:
         lines += [
             "",

@@ -25,7 +25,9 @@ from rsvo_env.sampled import sampled_braking_rhs
 
 __all__ = ["Rows", "support"]
 
-BARRIERS = ("braking", "hocbf")
+# "backup" (rsvo_env.backup_barrier) is the double integrator's default; "braking" and
+# "hocbf" are kept by name for comparison
+BARRIERS = ("backup", "braking", "hocbf")
 SPLITS = ("capability", "sign_aware", "paper")
 
 
@@ -241,8 +243,11 @@ def double_integrator_rows(
     ``[-cap_i, RHS + cap_j]`` with ``cap`` the most evasive push the box allows along dp; when
     ``RHS < -(cap_i + cap_j)`` the pair is unrecoverable and each takes ``RHS / 2``).
     """
-    if barrier not in BARRIERS:
-        raise ValueError(f"barrier {barrier!r} is unknown; use one of {BARRIERS}")
+    if barrier not in ("braking", "hocbf"):
+        raise ValueError(
+            f"barrier {barrier!r} has no pair rows here; use 'braking' or 'hocbf' "
+            "('backup': rsvo_env.backup_barrier.backup_rows)"
+        )
     if split not in SPLITS:
         raise ValueError(f"split {split!r} is unknown; use one of {SPLITS}")
     n = positions.shape[0]

@@ -30,7 +30,7 @@ from rsvo_env.pairs import Floor
 from rsvo_env.reset_options import check_options
 from rsvo_env.residual import Residual
 from rsvo_env.responsibility import Weighting, check_weighting
-from rsvo_env.safety import SafetyFilter
+from rsvo_env.safety import FilterConfig, SafetyFilter
 from rsvo_env.scenarios import Scenario
 from rsvo_env.scene_checks import check_scene, check_scene_filter
 from rsvo_env.stall import StallClock, goal_distance
@@ -99,7 +99,7 @@ class Simulator:
             "dynamics": scenario.dynamics,
             "gamma": float(p["gamma"]),
             "goal_tolerance": float(p["goal_tolerance"]),
-            "barrier": p.get("barrier", "braking"),
+            "barrier": p.get("barrier", FilterConfig.barrier),
             "split": p.get("split", "capability"),
         }
         self.filters: list[SafetyFilter] = []

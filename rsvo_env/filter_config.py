@@ -49,7 +49,7 @@ class FilterConfig:
     dynamics: str | models.Dynamics = "single_integrator"
     weighting: Weighting = "asymmetric"
     solver: str = "exact"
-    barrier: str = "braking"
+    barrier: str = "backup"
     split: str = "capability"
     gamma2: float | None = None
     neighbor_radius: float | None = None

@@ -40,7 +40,6 @@ from rsvo_env.responsibility import (
     validate_weight_matrix,
     weight_matrix,
 )
-from rsvo_env.rows import with_obstacles
 from rsvo_env.solvers import dense as dense_solver
 from rsvo_env.validation import check_theta, check_vectors, real_array
 
@@ -258,12 +257,8 @@ class SafetyFilter:
             I, J = pairs.candidate_pairs(positions, radius)
         weights = self.pair_weights(theta, omega, I, J, weighting)
         vel = None if velocities is None else velocities.reshape(E * n, 2)
-        rows = cfg.model.rows(cfg, pos, vel, weights, I, J, bodies)
-        obstacle_h = None
-        if obstacles is not None:
-            caps = obstacles[None] if obstacles.ndim == 2 else obstacles
-            *obstacle_rows, obstacle_h = cfg.model.obstacle_rows(cfg, pos, vel, bodies, caps, n)
-            rows = with_obstacles(rows, *obstacle_rows)
+        caps = obstacles if obstacles is None or obstacles.ndim == 3 else obstacles[None]
+        rows, obstacle_h = cfg.model.filter_rows(cfg, pos, vel, weights, I, J, bodies, caps, n)
         if rotation is not None:
             rows = replace(rows, flat_A=rotate_rows(rows.flat_A, rows.owner, rotation))
         actions, feasible, active, violation = solvers.solve(

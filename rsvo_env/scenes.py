@@ -89,10 +89,6 @@ class Scene(Scenario):
         if p["radii"] is not None:
             self._radii = check_per_agent(p["radii"], "custom.radii", (n,))
         self._obstacles = Obstacles.of(p["circles"], p["walls"], p["thickness"])
-        if not self.model.walls and p["walls"] is not None and len(p["walls"]):
-            raise ValueError(
-                f"custom: walls are not available for the {self.model.name} yet (circles are)"
-            )
         check_scene(self, self._starts, self._goals, self._obstacles.capsules)
 
     @property

@@ -51,7 +51,7 @@ def test_isolated_pairs_of_their_own_size_and_limit_keep_their_distance(scale, d
     theta = rng.uniform(0, 10, 2 * n_pairs)
     cfg = FilterConfig(
         gamma=gamma_dt / dt, safety_radius=2.0 * scale, u_max=3.0 * scale, dt=dt,
-        dynamics="double_integrator", neighbor_radius=1e4 * scale,
+        dynamics="double_integrator", barrier="braking", neighbor_radius=1e4 * scale,
     )  # fmt: skip
     flt = SafetyFilter(cfg)
     worst, infeasible_in_safe_set, touched, steps = np.inf, 0, 0, int(round(12.0 / dt))
@@ -88,7 +88,7 @@ def test_culled_equals_all_pairs(n, seed):
     theta = rng.uniform(0, 10, n)
     dt = 0.05
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.2, u_max=3.0, dt=dt,
-                                    dynamics="double_integrator"))  # fmt: skip
+                                    dynamics="double_integrator", barrier="braking"))  # fmt: skip
     goals = rng.uniform(-3 * np.sqrt(n), 3 * np.sqrt(n), (n, 2))
     active = 0
     for _ in range(8):  # a few steps in, so rows bind
@@ -107,7 +107,7 @@ def test_equal_bodies_are_the_scalar_config_to_the_bit():
     nominal = rng.uniform(-2, 2, (80, 2))
     theta = rng.uniform(0, 10, 80)
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0, dt=0.05,
-                                    dynamics="double_integrator"))  # fmt: skip
+                                    dynamics="double_integrator", barrier="braking"))  # fmt: skip
     scalar = flt.filter(p, nominal, theta, velocities=v)
     equal = {"radii": np.full(80, 0.5), "u_max": np.full(80, 2.0)}
     own = flt.filter(p, nominal, theta, velocities=v, **equal)
@@ -122,7 +122,7 @@ def test_a_weaker_brake_is_kept_further_away():
     p = np.array([[0.0, 0.0], [3.5, 0.0]])
     v = np.array([[2.0, 0.0], [-2.0, 0.0]])
     flt = SafetyFilter(FilterConfig(gamma=5.0, safety_radius=1.0, u_max=3.0, dt=0.05,
-                                    dynamics="double_integrator"))  # fmt: skip
+                                    dynamics="double_integrator", barrier="braking"))  # fmt: skip
     strong = flt.filter(p, np.zeros((2, 2)), np.ones(2), velocities=v, u_max=[3.0, 3.0])
     weak = flt.filter(p, np.zeros((2, 2)), np.ones(2), velocities=v, u_max=[3.0, 0.5])
     assert strong.feasible.all() and weak.feasible.all()
@@ -135,7 +135,7 @@ def test_a_weaker_brake_is_kept_further_away():
 
 def test_the_sampled_bound_is_checked_per_pair_and_names_it():
     flt = SafetyFilter(FilterConfig(gamma=5.0, safety_radius=1.0, u_max=1.0, dt=0.1,
-                                    dynamics="double_integrator"))  # fmt: skip
+                                    dynamics="double_integrator", barrier="braking"))  # fmt: skip
     p = np.array([[0.0, 0.0], [1.0, 0.0], [50.0, 0.0]])
     radii = np.array([0.004, 0.004, 0.5])  # dt^2 (A / 2 + U) = 0.01 (1 + 1.41) > 0.008
     with pytest.raises(ValueError, match=r"agents 0 and 1: dt\^2 \(A / 2 \+ U\)"):
@@ -161,7 +161,8 @@ def test_each_agent_brakes_before_a_circle_with_its_own_limit(scale):
     v = np.zeros((n, 1, 2))
     v[:, 0, 0] = speed
     flt = SafetyFilter(FilterConfig(gamma=5.0, safety_radius=0.4 * scale, u_max=3.0 * scale,
-                                    dt=dt, dynamics="double_integrator"))  # fmt: skip
+                                    dt=dt, dynamics="double_integrator",
+                                           barrier="braking"))  # fmt: skip
     circle = Obstacles.of(circles=[(0.0, 0.0, rho)])
     closest = np.inf
     for _ in range(int(40 / dt)):
@@ -177,7 +178,8 @@ def test_each_agent_brakes_before_a_circle_with_its_own_limit(scale):
 
 @pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
 def test_a_custom_pair_of_double_integrators_of_their_own_size_and_limit(scale):
-    """The simulator path: ``custom`` with ``dynamics="double_integrator"``, per-agent radii and
+    """The simulator path: ``custom`` with ``dynamics="double_integrator",
+                                             barrier="braking"``, per-agent radii and
     a_max, a nearly head-on swap behind the filter: both arrive, bodies never touch."""
     import rsvo_env
     import wrappers
@@ -223,6 +225,8 @@ def test_custom_dynamics_is_checked():
         rsvo_env.parallel_env("custom", a_max=2.0, **kw)
     with pytest.raises(ValueError, match=r"custom.a_max\[1\] = -1.0"):
         rsvo_env.parallel_env("custom", dynamics="double_integrator", a_max=[1.0, -1.0], **kw)
-    with pytest.raises(ValueError, match="walls are not available for the double_integrator"):
-        rsvo_env.parallel_env("custom", dynamics="double_integrator",
-                              walls=[[[2.0, -5.0], [2.0, -3.0]]], **kw)  # fmt: skip
+    # walls: the backup barrier (the default) takes them; the braking barrier's refusal is in
+    # test_backup_barrier
+    env = rsvo_env.parallel_env("custom", dynamics="double_integrator",
+                                walls=[[[2.0, -5.0], [2.0, -3.0]]], **kw)  # fmt: skip
+    assert env.reset(seed=0)[0]

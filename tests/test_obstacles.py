@@ -160,7 +160,8 @@ def test_a_double_integrator_brakes_before_a_circle_from_any_stoppable_speed(
 
     a_max, rho = 1.0 * scale, 1.0 * scale
     obstacles = Obstacles.of(circles=[(0.0, 0.0, rho)])
-    flt = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=a_max, gamma=gamma,
+    flt = SafetyFilter(FilterConfig(dynamics="double_integrator",
+                                    barrier="braking", u_max=a_max, gamma=gamma,
                                     safety_radius=scale, dt=dt))  # fmt: skip
     Ds = 0.5 * scale + rho
     room = 3.0 * scale
@@ -186,7 +187,8 @@ def test_a_double_integrator_through_a_field_of_circles_never_enters_one(seed):
     grid = np.stack(np.meshgrid([10.0, 20.0, 30.0], [8.0, 18.0, 28.0]), -1).reshape(-1, 2)
     circles = np.c_[grid + rng.uniform(-1, 1, grid.shape), rng.uniform(0.5, 1.5, len(grid))]
     obstacles = Obstacles.of(circles=circles)
-    flt = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=1.0, gamma=2.0, dt=0.05))
+    flt = SafetyFilter(FilterConfig(dynamics="double_integrator",
+                                    barrier="braking", u_max=1.0, gamma=2.0, dt=0.05))
     near = np.inf
     for y in np.linspace(4.0, 32.0, 8):
         x, v = np.array([[0.0, y]]), np.zeros((1, 2))
@@ -202,13 +204,14 @@ def test_a_double_integrator_through_a_field_of_circles_never_enters_one(seed):
     assert near < 0.2, "no vehicle came near a circle"
 
 
-def test_walls_are_refused_for_the_double_integrator():
-    di = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=2.0))
+def test_walls_are_refused_for_the_double_integrators_braking_barrier():
+    di = SafetyFilter(FilterConfig(dynamics="double_integrator", barrier="braking", u_max=2.0))
     x = np.array([[0.0, 0.0], [5.0, 0.0]])
     with pytest.raises(ValueError, match="walls are not available for the double_integrator"):
         di.filter(x, np.zeros((2, 2)), np.ones(2), np.zeros((2, 2)),
                   obstacles=Obstacles.of(walls=[((2.0, -1.0), (2.0, 1.0))]))  # fmt: skip
-    tight = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=2.0, dt=0.4, gamma=2.0,
+    tight = SafetyFilter(FilterConfig(dynamics="double_integrator",
+                                      barrier="braking", u_max=2.0, dt=0.4, gamma=2.0,
                                       safety_radius=1.0))  # fmt: skip
     with pytest.raises(ValueError, match="sampled-data guarantee"):
         tight.filter(x, np.zeros((2, 2)), np.ones(2), np.zeros((2, 2)),

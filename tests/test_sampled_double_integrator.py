@@ -47,7 +47,7 @@ def pairs_filter(dt, gamma_dt):
         safety_radius=DS,
         u_max=A_MAX,
         dt=dt,
-        dynamics="double_integrator",
+        dynamics="double_integrator", barrier="braking",
         neighbor_radius=1e4,
     )
     return SafetyFilter(cfg)
@@ -151,7 +151,8 @@ def test_one_neighbour_is_feasible_at_any_gamma(seed, dt, gamma_dt, ti, tj):
     p[0] -= dp / np.linalg.norm(dp) * shrink
     assert braking_h(p, v, A_MAX)[0] >= -1e-9
     cfg = FilterConfig(
-        gamma=gamma_dt / dt, safety_radius=DS, u_max=A_MAX, dt=dt, dynamics="double_integrator"
+        gamma=gamma_dt / dt, safety_radius=DS, u_max=A_MAX, dt=dt, dynamics="double_integrator",
+                                                                   barrier="braking"
     )
     nominal = rng.uniform(-A_MAX, A_MAX, (2, 2))
     res = SafetyFilter(cfg).filter(p, nominal, [ti, tj], velocities=v)
@@ -187,6 +188,7 @@ def test_nearly_head_on_pairs_at_the_boundary_are_feasible(dt, gamma_dt, reach, 
     v[0::2], v[1::2] = common + w / 2, common - w / 2
     cfg = FilterConfig(
         gamma=gamma_dt / dt, safety_radius=ds, u_max=a_max, dt=dt, dynamics="double_integrator",
+                                                                   barrier="braking",
         neighbor_radius=spacing / 10,
     )  # fmt: skip
     res = SafetyFilter(cfg).filter(

@@ -90,7 +90,8 @@ def test_double_integrator_crowd_flags_every_infeasible_step():
     p, _, goals = sc.initial_state(np.random.default_rng(4))
     v = np.zeros_like(p)
     theta = np.random.default_rng(5).uniform(1, 10, n)
-    cfg = FilterConfig(gamma=2.0, u_max=a_max, dt=dt, dynamics="double_integrator")
+    cfg = FilterConfig(gamma=2.0, u_max=a_max, dt=dt, dynamics="double_integrator",
+                                                      barrier="braking")
     flt = SafetyFilter(cfg)
     I, J = pairs.all_pairs(n)
     w = flt.pair_weights(theta, None, I, J)

@@ -42,26 +42,32 @@ def check_sampled_pairs(dt: float, bodies: Any, I: NDArray, J: NDArray) -> None:
 
 
 class DoubleIntegrator(Dynamics):
-    """The braking or HOCBF barrier rows, split by responsibility (``FilterConfig.barrier``,
-    ``split``)."""
+    """The backup barrier's rows (``rsvo_env.backup_barrier``, the default: every QP feasible
+    while every h >= 0, walls included), or the braking or HOCBF barrier's, split by
+    responsibility (``FilterConfig.barrier``, ``split``)."""
 
     name = "double_integrator"
     limit_name = "a_max"
     needs_velocities = True
     per_agent_bodies = True
-    walls = False  # circles only: a wall needs a barrier and proof of its own
 
     def step(self, positions, velocities, u, dt):
         return double_integrator_step(positions, velocities, u, dt)
 
+    def takes_walls(self, barrier: str) -> bool:
+        # the braking barrier's proof covers circles only; the backup barrier's any capsule
+        return barrier == "backup"
+
     def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
-        if cfg.barrier != "braking":
+        if cfg.barrier == "hocbf":
             return
         if not ((lo < 0).all() and (hi > 0).all()):
             raise ValueError(
-                f"FilterConfig: the braking barrier needs u_min < 0 < u_max, got "
+                f"FilterConfig: the {cfg.barrier} barrier needs u_min < 0 < u_max, got "
                 f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
             )
+        if cfg.barrier == "backup":  # exact in sampled time at any dt
+            return
         from rsvo_env.barriers import braking_capability, largest_input
 
         reach = float(braking_capability(lo, hi) + largest_input(lo, hi))
@@ -74,8 +80,25 @@ class DoubleIntegrator(Dynamics):
                 "braking barrier needs dt^2 (a_max + |u_max|) < safety_radius"
             )
 
+    def filter_rows(self, cfg, positions, velocities, weights, I, J, bodies, capsules, n):
+        if cfg.barrier != "backup":
+            return super().filter_rows(
+                cfg, positions, velocities, weights, I, J, bodies, capsules, n
+            )
+        from rsvo_env.backup_barrier import backup_rows
+
+        return backup_rows(
+            positions, velocities, weights, I, J, cfg.gamma, cfg.dt, bodies.radii, bodies.lo,
+            bodies.hi, capsules, n,
+        )  # fmt: skip
+
     def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:
         from rsvo_env import barriers
+
+        if cfg.barrier == "backup":
+            raise ValueError(
+                "the backup barrier's rows come with each agent's trust box: use filter_rows"
+            )
 
         if bodies.uniform:
             lo, hi, radii = cfg.lo, cfg.hi, None
@@ -94,7 +117,8 @@ class DoubleIntegrator(Dynamics):
         walls = np.any(capsules[..., 0:2] != capsules[..., 2:4], axis=-1)
         if walls.any():
             raise ValueError(
-                "walls are not available for the double_integrator yet (circles are): obstacle "
+                f"walls are not available for the double_integrator with the {cfg.barrier} "
+                "barrier (circles are; the backup barrier takes walls): obstacle "
                 f"{int(np.nonzero(walls)[-1][0])} is a segment"
             )
         if cfg.dt is not None and cfg.barrier == "braking":
@@ -113,6 +137,15 @@ class DoubleIntegrator(Dynamics):
     def culling_radii(self, cfg, omega_floor, velocities, bodies):
         from rsvo_env import pairs
 
+        if cfg.barrier == "backup":
+            from rsvo_env.backup_barrier import backup_radii
+
+            E, n = velocities.shape[:2]
+            return backup_radii(
+                omega_floor, velocities, cfg.gamma, cfg.dt, bodies.radii.reshape(E, n),
+                bodies.lo.reshape(E, n, 2), bodies.hi.reshape(E, n, 2),
+                bodies.speed.reshape(E, n),
+            )  # fmt: skip
         if bodies.uniform:
             return pairs.double_integrator_radii(
                 omega_floor, velocities, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi,

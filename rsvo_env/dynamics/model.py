@@ -37,8 +37,6 @@ class Dynamics:
     # whether its agents may each have their own body radius (rsvo_env.bodies), and box
     per_agent_bodies: ClassVar[bool] = False
     per_agent_limits: ClassVar[bool] = True
-    # whether its obstacle rows cover walls (segments), not only circles
-    walls: ClassVar[bool] = True
     # whether its state has a heading the filter needs (``SafetyFilter.filter(headings=)``)
     needs_headings: ClassVar[bool] = False
 
@@ -47,6 +45,11 @@ class Dynamics:
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The exact zero-order-hold step: (positions, velocities) after ``dt`` with ``u``."""
         raise NotImplementedError
+
+    def takes_walls(self, barrier: str) -> bool:
+        """Whether its obstacle rows under ``barrier`` cover walls (segments), not only
+        circles."""
+        return True
 
     def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
         """Refuse an input box under which this model's guarantee does not hold."""
@@ -126,6 +129,31 @@ class Dynamics:
         """Every agent's rows against the static obstacles (``rsvo_env.obstacles``), weight 1:
         offsets, A, b, h, obstacle of each row, and each agent's smallest h over them."""
         raise ValueError(f"obstacles are not available for the {self.name} yet")
+
+    def filter_rows(
+        self,
+        cfg: FilterConfig,
+        positions: NDArray,
+        velocities: NDArray | None,
+        weights: NDArray,
+        I: NDArray,
+        J: NDArray,
+        bodies: Bodies,
+        capsules: NDArray | None,
+        n: int,
+    ) -> tuple[Rows, NDArray | None]:
+        """What the filter solves: every agent's rows (pairs, then obstacles, ``capsules``
+        (E, O, 5) or (1, O, 5) or None) and each agent's smallest barrier value against the
+        obstacles (None without)."""
+        from rsvo_env.rows import with_obstacles
+
+        rows = self.rows(cfg, positions, velocities, weights, I, J, bodies)
+        if capsules is None:
+            return rows, None
+        *obstacle_rows, obstacle_h = self.obstacle_rows(
+            cfg, positions, velocities, bodies, capsules, n
+        )
+        return with_obstacles(rows, *obstacle_rows), obstacle_h
 
     def culling_radii(
         self, cfg: FilterConfig, omega_floor: NDArray, velocities: NDArray | None, bodies: Bodies
