@@ -14,8 +14,8 @@ direction (``barriers.braking_capability``):
   ``h_io = dist(p_i, segment_o) - r_i - rho_o - L_i`` for an obstacle (weight 1).
 
 Agent i's row against a neighbour or obstacle, unit normal ``e`` pointing to i, share
-``sigma = omega_ij gamma dt h`` (eq. ``share``; a rounding below 0 read as 0), is ``A . a <= b`` with
-``A = g_i - (dt^2 / 2) e``, ``g_i = dt (v_i + dt beta_i) / c_i``, and
+``sigma = omega_ij gamma dt h`` (eq. ``share``; a rounding below 0 read as 0), is
+``A . a <= b`` with ``A = g_i - (dt^2 / 2) e``, ``g_i = dt (v_i + dt beta_i) / c_i``, and
 ``b = A . beta_i + tau - R_i`` (eq. ``row``), where
 ``tau = sigma + e . dp_i(beta_i) + L_i - L(|v_i + dt beta_i|)`` is the row's slack at the backup
 and ``R_i = dt^2 (rho_i^2 / c_i + rho_i / sqrt 2)`` (eq. ``remainder``) bounds the curvature of
