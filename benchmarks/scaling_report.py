@@ -30,6 +30,11 @@ def plot(rows: list[dict], di: list[dict], path: Path) -> None:
         if pts:
             ax.plot(*zip(*pts, strict=True), style,
                     label=f"double integrator, {barrier} barrier, theta 1..10")  # fmt: skip
+    # the double integrator's own reference: its ratios are to this run, not to section 1's
+    ref = {d["n"]: d["si"] for d in di if d.get("barrier") == "backup"}
+    if ref:
+        ax.plot(list(ref), list(ref.values()), ".:", color="grey",
+                label="single integrator, in the double integrator's run")  # fmt: skip
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("agents N")

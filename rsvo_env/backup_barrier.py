@@ -14,7 +14,8 @@ direction (``barriers.braking_capability``):
   ``h_io = dist(p_i, segment_o) - r_i - rho_o - L_i`` for an obstacle (weight 1).
 
 Agent i's row against a neighbour or obstacle, unit normal ``e`` pointing to i, share
-``sigma = omega_ij gamma dt h`` (eq. ``share``; a rounding below 0 read as 0), is
+``sigma = omega_ij gamma dt h`` (eq. ``share``; a rounding below 0 read as 0, ``omega_ji``
+for ``omega_ij`` where h < 0), is
 ``A . a <= b`` with ``A = g_i - (dt^2 / 2) e``, ``g_i = dt (v_i + dt beta_i) / c_i``, and
 ``b = A . beta_i + tau - R_i`` (eq. ``row``), where
 ``tau = sigma + e . dp_i(beta_i) + L_i - L(|v_i + dt beta_i|)`` is the row's slack at the backup
@@ -150,7 +151,10 @@ def backup_rows(
     owner = [I, J]
     normals = [e, -e]
     hp = rate * settled(h, dist + t.L[I] + t.L[J])
-    shares = [weights[:, 0] * hp, weights[:, 1] * hp]
+    # while h >= 0 the egoist (larger omega) keeps the larger share of the slack; below 0 the
+    # share is a deficit to make up, and the egoist takes the smaller one (the sign-aware split)
+    w = np.where(hp >= 0.0, weights[:, 0], weights[:, 1])
+    shares = [w * hp, (1.0 - w) * hp]
     hs, others = [h, h], [J, I]
     obstacle_h = None
     if capsules is not None:
