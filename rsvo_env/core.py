@@ -33,7 +33,7 @@ from rsvo_env.responsibility import Weighting, check_weighting
 from rsvo_env.safety import FilterConfig, SafetyFilter
 from rsvo_env.scenarios import Scenario
 from rsvo_env.scene_checks import check_scene, check_scene_filter
-from rsvo_env.stall import StallClock, goal_distance
+from rsvo_env.stall import StallClock, deadlock_steps, goal_distance
 from rsvo_env.state import State
 from rsvo_env.validation import check_count, check_real
 from rsvo_env.weights import Weights
@@ -116,10 +116,14 @@ class Simulator:
             self.num_envs, n, self.dt, self.safety_radius, record_series=record_series
         )
         self.limits = observation.limits_for(scenario)
-        self.stall: StallClock | None = None
-        if stall_clock is not None:
-            self.stall = StallClock.create(stall_clock, self.num_envs, n)
+        # every agent's progress clock (rsvo_env.stall): the deadlock signal, observed as the
+        # stall clock when ``stall_clock`` is given
+        unit = 1 if stall_clock is None else stall_clock
+        self.progress = StallClock.create(unit, self.num_envs, n)
+        self.stall = None if stall_clock is None else self.progress
+        if self.stall is not None:
             self.limits = replace(self.limits, stall=self.stall.bound(self.max_steps))
+        self.deadlock_window = deadlock_steps(self.dt)
         # the after-integration stage in one compiled call where the scenario allows it
         self.fused_post_step = post_step.fusable(scenario, n)
 
@@ -206,8 +210,7 @@ class Simulator:
         self._derive()
         s.reached[idx] = s.at_goal[idx]
         self.metrics.reset(idx)
-        if self.stall is not None:
-            self.stall.reset(idx, goal_distance(s.positions[idx], s.goals[idx]))
+        self.progress.reset(idx, goal_distance(s.positions[idx], s.goals[idx]))
 
     def _derive(self) -> None:
         """What follows from the current positions, once per state: the nearest distance, the K
@@ -330,8 +333,7 @@ class Simulator:
         if self.reward_team:
             # each agent also shares its env's mean reward (the reward_team share of it)
             reward = reward + self.reward_team * (reward.mean(-1, keepdims=True) - reward)
-        if self.stall is not None:
-            self.stall.tick(goal_distance(s.positions, s.goals), s.at_goal, self.safety_radius)
+        self.progress.tick(goal_distance(s.positions, s.goals), s.at_goal, self.safety_radius)
         signals = self.signals(u_nominal, u, intervention, stats)
         return self.observe(), reward, terminated, truncated, signals
 
@@ -370,6 +372,7 @@ class Simulator:
             ).astype(np.float64),
             "at_goal": s.at_goal,
             "rh_active": s.rh_active,
+            "deadlocked": self.progress.stalled(self.deadlock_window, s.at_goal),
         }
 
     def observe(self, envs: NDArray[np.int64] | None = None) -> NDArray[np.float32]:

@@ -41,6 +41,10 @@ FLAT_FIELDS = (
     ("min_distance", np.float64),
     ("collision_steps", np.int64),
     ("infeasible", np.int64),
+    # agents that have reached their goals (at least once) so far, and the makespan: the step
+    # the last of them first reached it (-1 until all have)
+    ("arrived", np.int64),
+    ("makespan", np.int64),
 )
 
 
@@ -229,7 +233,14 @@ class EpisodeMetrics:
             "min_distance": self.min_distance,
             "collision_steps": self.collision_steps,
             "infeasible": self.infeasible,
+            "arrived": (self.arrival >= 0).sum(axis=-1),
+            "makespan": self.makespan,
         }
+
+    @property
+    def makespan(self) -> NDArray[np.int64]:
+        """(E,) the step the last agent first reached its goal, -1 until every agent has."""
+        return np.where((self.arrival >= 0).all(axis=-1), self.arrival.max(axis=-1), -1)
 
     def flat(self) -> dict[str, NDArray]:
         """(E,) arrays ``episode_<field>`` of the running episodes (final on their last step)."""
@@ -247,6 +258,8 @@ class EpisodeMetrics:
             float(self.min_distance[e]),
             int(self.collision_steps[e]),
             int(self.infeasible[e]),
+            int((self.arrival[e] >= 0).sum()),
+            int(self.arrival[e].max()) if (self.arrival[e] >= 0).all() else -1,
         )
 
     def summary(self, e: int = 0) -> dict[str, Any]:
@@ -261,6 +274,8 @@ class EpisodeMetrics:
             "deadlock_onset": step(self.deadlock_onset),
             "deadlock_resolved": step(self.deadlock_resolved),
             "completed": step(self.completed),
+            "makespan": step(self.makespan),
+            "arrived": int((self.arrival[e] >= 0).sum()),
             "min_distance": float(self.min_distance[e]),
             "n_collision_steps": int(self.collision_steps[e]),
             "n_infeasible": int(self.infeasible[e]),

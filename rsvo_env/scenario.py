@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env import dynamics, nominal
+from rsvo_env import dynamics, nominal, rorca
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.obstacles import Obstacles
 from rsvo_env.planar import within
@@ -30,8 +30,14 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "theta_max": 1000.0,
     # (low, high): each episode draws every agent's theta uniformly from it (env's generator)
     "theta_range": None,
+    # the scripted controller: "move_to_goal" (the paper's, Sec. V-A) or "rorca" (R-ORCA's
+    # active velocity toward it, rsvo_env.rorca), with its time horizon and body scale
+    "nominal": "move_to_goal",
+    "rorca_tau": 2.0,
+    "rorca_pad": 1.05,
 }
 DEADLOCK_RESOLUTIONS = ("right_hand", "none")
+NOMINALS = ("move_to_goal", "rorca")
 
 
 @njit(cache=True)
@@ -106,6 +112,17 @@ class Scenario:
                 f"{self.name}.deadlock_resolution = {params['deadlock_resolution']!r}; "
                 f"use one of {DEADLOCK_RESOLUTIONS}"
             )
+        if params["nominal"] not in NOMINALS:
+            raise ValueError(
+                f"{self.name}.nominal = {params['nominal']!r}; use one of {NOMINALS}"
+            )
+        if params["nominal"] == "rorca" and not self.model.velocity_input:
+            raise ValueError(
+                f"{self.name}.nominal = 'rorca' steers velocities: the {self.model.name} is not "
+                "controlled by its velocity (use nominal='move_to_goal')"
+            )
+        for key in ("rorca_tau", "rorca_pad"):
+            params[key] = check_positive(params[key], f"{self.name}.{key}")
         check_count(params["max_steps"], f"{self.name}.max_steps", 1)
         if params["theta"] is not None:
             self.check_theta(params["theta"])
@@ -227,14 +244,28 @@ class Scenario:
 
     def nominal(self, state: Any, right_hand: bool = True) -> NDArray[np.float64]:
         """Scripted nominal controls (E, N, 2) in physical units: move-to-goal (paper, Sec. V-A)
-        plus the right-hand rule (unless ``right_hand`` is False)."""
-        return self.move_to_goal(state, right_hand, self.u_max)
+        plus the right-hand rule (unless ``right_hand`` is False), or R-ORCA's velocity toward
+        it (``nominal="rorca"``)."""
+        return self.steer(state, self.move_to_goal(state, right_hand, self.u_max))
+
+    def steer(self, state: Any, preferred: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The scripted controller's command from the ``preferred`` velocities: themselves, or
+        with ``nominal="rorca"`` the R-ORCA velocity closest to them (``rsvo_env.rorca``,
+        bodies ``rorca_pad`` times the agents', horizon ``rorca_tau``)."""
+        p = self.params
+        if p["nominal"] != "rorca":
+            return preferred
+        return rorca.rorca_velocities(
+            state.positions, state.velocities, preferred, p["rorca_pad"] * self.radii,
+            state.theta, state.weighting, self.u_max, p["dt"], p["rorca_tau"],
+            parked=state.at_goal,
+        )  # fmt: skip
 
     def move_to_goal(self, state: Any, right_hand: bool, speed: float) -> NDArray[np.float64]:
         """The move-to-goal velocity of norm at most ``speed``, turned by the right-hand rule
         where it is on (unless ``right_hand`` is False)."""
         p = self.params
-        turn = right_hand and p["deadlock_resolution"] == "right_hand"
+        turn = self.turns(right_hand)
         return nominal.move_to_goal(
             state.positions,
             state.goals,
@@ -243,6 +274,11 @@ class Scenario:
             state.rh_active if turn else None,
             p["rh_angle_deg"],
         )
+
+    def turns(self, right_hand: bool) -> bool:
+        """Whether the right-hand rule turns the move-to-goal command (R-ORCA's preferred
+        velocity too: the turn breaks the symmetric jams ORCA's half-planes alone hold)."""
+        return right_hand and self.params["deadlock_resolution"] == "right_hand"
 
     def right_hand_active(self, state: Any) -> NDArray[np.bool_]:
         """(E, N): agents whose nominal the right-hand rule turns (always False without it), from

@@ -64,6 +64,7 @@ class CircularSwap(Scenario):
         "max_steps": 2000,
         # rotate the whole circle by a uniform random angle each episode (env's generator)
         "random_rotation": False,
+        "nominal": "rorca",
     }
 
     def initial_state(self, rng):
@@ -217,6 +218,7 @@ class Crowd(Scenario):
         "spacing_factor": 1.2,
         "side_factor": 2.5,
         "max_steps": 2000,
+        "nominal": "rorca",
     }
 
     @property

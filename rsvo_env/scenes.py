@@ -142,7 +142,7 @@ class Doorway(Scenario):
     name = "doorway"
     positive = (*Scenario.positive, "gap", "wall_half_length", "thickness", "depth")
     defaults = {**BASE, "num_agents": 8, "gap": 4.0, "wall_half_length": 12.0, "thickness": 0.4,
-                "depth": 6.0, "max_steps": 4000}  # fmt: skip
+                "depth": 6.0, "max_steps": 4000, "nominal": "rorca"}  # fmt: skip
 
     def check(self) -> None:
         p = self.params
@@ -194,9 +194,10 @@ class Doorway(Scenario):
         lane = -side * 0.25 * p["gap"]
         mouth = np.stack([side * p["safety_radius"], lane], -1)
         target = np.where(crossed[..., None], goals, mouth)
-        turn = right_hand and p["deadlock_resolution"] == "right_hand"
-        rh = state.rh_active if turn else None
-        return nominal.move_to_goal(x, target, p["k"], self.u_max, rh, p["rh_angle_deg"])
+        rh = state.rh_active if self.turns(right_hand) else None
+        return self.steer(
+            state, nominal.move_to_goal(x, target, p["k"], self.u_max, rh, p["rh_angle_deg"])
+        )
 
     def arena(self):
         p = self.params
@@ -213,7 +214,7 @@ class ObstacleField(Scenario):
     name = "obstacle_field"
     positive = (*Scenario.positive, "side")
     defaults = {**BASE, "num_agents": 10, "side": 20.0, "num_circles": 8,
-                "circle_radius": (0.5, 1.5), "max_steps": 3000}  # fmt: skip
+                "circle_radius": (0.5, 1.5), "max_steps": 3000, "nominal": "rorca"}  # fmt: skip
 
     def check(self) -> None:
         check_count(self.params["num_circles"], "obstacle_field.num_circles", 0)

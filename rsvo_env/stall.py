@@ -21,6 +21,14 @@ from rsvo_env import planar
 from rsvo_env.validation import check_count
 
 PROGRESS = 0.02  # safety radii closer to the goal that count as progress
+# an agent short of its goal that has made no progress for this long is deadlocked
+# (docs/metrics.md): longer than any wait for a neighbour to pass at the crowds' speeds
+DEADLOCK_SECONDS = 10.0
+
+
+def deadlock_steps(dt: float) -> int:
+    """The deadlock window in steps of ``dt`` (at least one)."""
+    return max(1, int(round(DEADLOCK_SECONDS / dt)))
 
 
 @dataclass
@@ -53,6 +61,10 @@ class StallClock:
     def value(self, envs: NDArray[np.int64] | slice = slice(None)) -> NDArray[np.float64]:
         """The observed clock (E, N) (of ``envs``): steps stalled over ``unit``."""
         return self.steps[envs] / self.unit
+
+    def stalled(self, window: int, at_goal: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        """(E, N) agents short of their goals with no progress for ``window`` steps or more."""
+        return (self.steps >= window) & ~at_goal
 
     def bound(self, max_steps: int) -> float:
         """The largest value an episode of ``max_steps`` steps can show."""

@@ -19,7 +19,7 @@ class UnicycleCrowd(Crowd):
     # starts R + 4 l apart: the look-ahead points, kept R + 2 l apart by the filter, start in
     # its safe set whatever the headings (|q_i - q_j| >= |p_i - p_j| - 2 l)
     defaults = {**Crowd.defaults, "lookahead": 0.2, "w_max": 3.0, "spacing_factor": 2.0,
-                "side_factor": 3.5}  # fmt: skip
+                "side_factor": 3.5, "nominal": "move_to_goal"}  # fmt: skip
 
     def check(self) -> None:
         p = self.params
@@ -38,7 +38,7 @@ class UnicycleCrowd(Crowd):
 
     def nominal(self, state, right_hand=True):
         p = self.params
-        turn = right_hand and p["deadlock_resolution"] == "right_hand"
         c = nominal.move_to_goal(state.positions, state.goals, p["k"], self.u_max,
-                                 state.rh_active if turn else None, p["rh_angle_deg"])  # fmt: skip
+                                 state.rh_active if self.turns(right_hand) else None,
+                                 p["rh_angle_deg"])  # fmt: skip
         return self.model.toward(state.positions, state.headings, c, p)

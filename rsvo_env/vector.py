@@ -39,9 +39,10 @@ class BatchedEnv:
 
     * every per-agent signal, (E, N, ...): ``u_nominal``, ``u_safe``, ``intervention``,
       ``feasible``, ``active_constraints``, ``max_violation``, ``min_distance``, ``cost``,
-      ``at_goal``, ``rh_active``;
+      ``at_goal``, ``rh_active``, ``deadlocked``;
     * the running episode's ``episode_steps``, ``episode_success``, ``episode_completed``,
-      ``episode_min_distance``, ``episode_collision_steps``, ``episode_infeasible``, (E,);
+      ``episode_min_distance``, ``episode_collision_steps``, ``episode_infeasible``,
+      ``episode_arrived``, ``episode_makespan``, (E,);
     * ``_final_obs`` (E,): the envs whose episode ended at this step. Those envs are reset on
       the same step: ``obs`` holds their new episode's first observation, ``final_obs`` their
       last one (rows of other envs are not meaningful), and the signals and ``episode_*``

@@ -142,7 +142,8 @@ def test_package_source_never_uses_global_rng():
 
 
 def test_circular_swap_without_filter_collides():
-    env = rsvo_env.parallel_env("circular_swap")
+    # the paper's move-to-goal (R-ORCA, the default, avoids by itself)
+    env = rsvo_env.parallel_env("circular_swap", nominal="move_to_goal")
     env.reset(seed=0)
     costs, dists = [], []
     while env.agents:

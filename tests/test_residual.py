@@ -10,27 +10,36 @@ from rsvo_env.residual import Residual
 from rsvo_env.vector import BatchedEnv
 
 
-def test_a_zero_residual_is_the_scripted_controller():
-    """To the float32 precision of the scripted actions (nominal_actions() returns float32; the
-    residual mode adds to the float64 command)."""
-    scripted = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("circular_swap"))
-    residual = wrappers.ResidualAction(
-        wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("circular_swap"))
-    )
+@pytest.mark.parametrize("nominal", ["move_to_goal", "rorca"])
+def test_a_zero_residual_is_the_scripted_controller(nominal):
+    """At every step the control requested is the scripted controller's command for that state,
+    exactly; for move-to-goal also the whole episode against the scripted actions, to the
+    float32 precision of ``nominal_actions()`` (R-ORCA feeds the velocity back, so that
+    rounding grows along an episode: its comparison is the exact one)."""
+    def make():
+        return wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("circular_swap", nominal=nominal))
+
+    scripted, residual = make(), wrappers.ResidualAction(make())
     theta = {"theta": [2, 1, 2, 1, 2, 1]}
     scripted.reset(seed=0, options=theta)
     residual.reset(seed=0, options=theta)
-    zero = {a: np.zeros(2, dtype=np.float32) for a in residual.possible_agents}
-    while scripted.agents:
-        scripted.step(scripted.unwrapped.nominal_actions())
-        residual.step(zero)
-        np.testing.assert_allclose(
-            residual.unwrapped.world.positions, scripted.unwrapped.world.positions, atol=1e-5
+    agents = residual.possible_agents
+    zero = {a: np.zeros(2, dtype=np.float32) for a in agents}
+    while residual.agents:
+        expect = residual.unwrapped.nominal_controls()
+        _, _, _, _, infos = residual.step(zero)
+        got = np.stack([infos[a]["u_nominal"] for a in agents])
+        np.testing.assert_allclose(got, expect, rtol=0, atol=1e-12)
+        if nominal == "move_to_goal":
+            scripted.step(scripted.unwrapped.nominal_actions())
+            np.testing.assert_allclose(
+                residual.unwrapped.world.positions, scripted.unwrapped.world.positions, atol=1e-5
+            )
+    if nominal == "move_to_goal":
+        assert (
+            residual.unwrapped.episode_metrics["completed"]
+            == (scripted.unwrapped.episode_metrics["completed"])
         )
-    assert (
-        residual.unwrapped.episode_metrics["completed"]
-        == (scripted.unwrapped.episode_metrics["completed"])
-    )
 
 
 def test_the_residual_is_gated_near_the_goal_and_held_to_the_speed_limit():
@@ -63,11 +72,13 @@ def test_the_residual_is_gated_near_the_goal_and_held_to_the_speed_limit():
 def test_batched_residuals_equal_the_wrapper(name, yield_radius, interaction_radius):
     E = 2
     radii = {"yield_radius": yield_radius, "interaction_radius": interaction_radius}
-    venv = BatchedEnv(name, num_envs=E, action="residual", gate_radius=0.5, max_steps=60, **radii)
+    # the paper's controller as the base, as the training configs run it (parked agents then
+    # stand still and the yield rule has something to do)
+    kw = {"max_steps": 60, "nominal": "move_to_goal"}
+    venv = BatchedEnv(name, num_envs=E, action="residual", gate_radius=0.5, **kw, **radii)
     singles = [
-        wrappers.ResidualAction(
-            wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, max_steps=60)), **radii
-        )
+        wrappers.ResidualAction(wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, **kw)),
+                                **radii)  # fmt: skip
         for _ in range(E)
     ]
     obs, _ = venv.reset(seed=4)

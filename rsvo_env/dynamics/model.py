@@ -37,6 +37,8 @@ class Dynamics:
     # whether its agents may each have their own body radius (rsvo_env.bodies), and box
     per_agent_bodies: ClassVar[bool] = False
     per_agent_limits: ClassVar[bool] = True
+    # whether its input is its velocity (a scripted controller may steer it as such: R-ORCA)
+    velocity_input: ClassVar[bool] = False
     # whether its state has a heading the filter needs (``SafetyFilter.filter(headings=)``)
     needs_headings: ClassVar[bool] = False
 

@@ -29,6 +29,7 @@ class SingleIntegrator(Dynamics):
     dense_kernel = True
     radius_from_weights = True
     per_agent_bodies = True
+    velocity_input = True
 
     def step(self, positions, velocities, u, dt):
         # the velocity of a single integrator is the control it integrated

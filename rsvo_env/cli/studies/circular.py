@@ -36,6 +36,10 @@ def random_theta_sets(seed: int, count: int) -> list[list[float]]:
     ]
 
 
+# the paper's scripted controller (Sec. V-A), not the scenario's default R-ORCA
+PAPER_NOMINAL = "move_to_goal"
+
+
 def study(plan: Plan, progress: Callable, out_dir: Path) -> dict[str, Any]:
     """The alternating example (with GIFs), the same without the right-hand rule, and the random
     sets; the symmetric filter ignores theta, so one symmetric run serves every set."""
@@ -46,6 +50,7 @@ def study(plan: Plan, progress: Callable, out_dir: Path) -> dict[str, Any]:
             theta=ALTERNATING,
             seed=plan.seed,
             gif=out_dir / f"circular_{w}.gif",
+            nominal=PAPER_NOMINAL,
         )
         for w in ("symmetric", "asymmetric")
     )
@@ -57,6 +62,7 @@ def study(plan: Plan, progress: Callable, out_dir: Path) -> dict[str, Any]:
             theta=ALTERNATING,
             seed=plan.seed,
             deadlock_resolution="none",
+            nominal=PAPER_NOMINAL,
         )
         for w in ("symmetric", "asymmetric")
     }
@@ -66,7 +72,7 @@ def study(plan: Plan, progress: Callable, out_dir: Path) -> dict[str, Any]:
     sets = random_theta_sets(plan.seed, max(n_small, n_large))
     per_set = []
     for theta in sets:
-        per_set.append(run("circular_swap", theta=theta, seed=plan.seed))
+        per_set.append(run("circular_swap", theta=theta, seed=plan.seed, nominal=PAPER_NOMINAL))
         progress()
     stats = {}
     for label, n in (("paper protocol", n_small), ("larger study", n_large)):

@@ -1,0 +1,249 @@
+"""Crowds that finish: the scripted controller behind the filter (R-ORCA, ``docs/liveness.md``)
+against ORCA (pyrvo, the ``baselines`` extra) on the same starts and goals.
+
+``crowd`` (R = 1 m, u_max = 2 m/s, k = 2, dt = 0.05, gamma = 20 so that gamma dt = 1 as in the
+training configs, theta drawn from 1..10 per episode):
+for each N and seed, ours through ``BatchedEnv`` (the filter on, its scripted nominal), ORCA
+with agent radius R/2, max speed u_max, neighbour distance 5R, 10 neighbours, horizon 2 s and
+the same move-to-goal preferred velocity. Per run: the share of agents that have reached their
+goals step by step, the makespan (the step the last did), the closest pair over the run. Also
+the circular swap (6 to 64 agents) and the doorway, ours alone, with the paper's 6-agent
+figures beside them, the weighting's effect (egoists first; asymmetric against symmetric), and
+move-to-goal (today's controller, kept by name) at N = 100.
+
+Writes ``benchmarks/results/liveness.md`` and ``liveness.png``.
+
+    python benchmarks/liveness.py [--quick] [--big]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from rsvo_env.neighbors import nearest_distance
+from rsvo_env.nominal import move_to_goal
+from rsvo_env.vector import BatchedEnv
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"
+DT = 0.05
+GAMMA = 20.0  # gamma dt = 1, as the training configs run the crowd
+
+
+def ours(n: int, seed: int, cap: int, scenario: str = "crowd", **kw) -> dict:
+    """One filtered episode of ``scenario`` under its scripted controller: arrivals by step."""
+    env = BatchedEnv(scenario, num_envs=1, safety_filter=True, num_agents=n, max_steps=cap,
+                     dt=kw.pop("dt", DT), **kw)  # fmt: skip
+    env.reset(seed=seed)
+    start = env.sim.state.positions[0].copy(), env.sim.state.goals[0].copy()
+    arrived, closest = [], np.inf
+    for _ in range(cap):
+        _, _, term, trunc, info = env.step(env.nominal_actions())
+        closest = min(closest, float(info["min_distance"].min()))
+        arrived.append(int(info["episode_arrived"][0]))
+        if arrived[-1] == n or term.any() or trunc.any():
+            break
+    theta = env.sim.state.theta[0].copy()
+    arrival = env.sim.metrics.arrival[0].copy()
+    return {"arrived": np.array(arrived) / n, "makespan": _makespan(arrived, n),
+            "closest": closest, "start": start, "theta": theta, "arrival": arrival}  # fmt: skip
+
+
+def orca(start: np.ndarray, goals: np.ndarray, cap: int, R=1.0, u_max=2.0, k=2.0, tol=0.05):
+    """ORCA (pyrvo) from the same starts to the same goals, the same preferred velocity."""
+    import pyrvo
+
+    n = len(start)
+    sim = pyrvo.RVOSimulator()
+    sim.set_time_step(DT)
+    sim.set_agent_defaults(5.0 * R, 10, 2.0, 2.0, R / 2, u_max)
+    for x in start:
+        sim.add_agent((float(x[0]), float(x[1])))
+    reached = np.zeros(n, dtype=bool)
+    arrived, closest = [], np.inf
+    for _ in range(cap):
+        pos = np.array([(q.x, q.y) for q in map(sim.get_agent_position, range(n))])
+        u = move_to_goal(pos, goals, k, u_max)
+        for i in range(n):
+            sim.set_agent_pref_velocity(i, (float(u[i, 0]), float(u[i, 1])))
+        sim.do_step()
+        pos = np.array([(q.x, q.y) for q in map(sim.get_agent_position, range(n))])
+        closest = min(closest, float(nearest_distance(pos[None]).min()))
+        reached |= np.linalg.norm(pos - goals, axis=1) < tol
+        arrived.append(int(reached.sum()))
+        if reached.all():
+            break
+    return {"arrived": np.array(arrived) / n, "makespan": _makespan(arrived, n),
+            "closest": closest}  # fmt: skip
+
+
+def _makespan(arrived: list[int], n: int) -> int | None:
+    return len(arrived) if arrived and arrived[-1] == n else None
+
+
+def crowds(sizes, seeds, cap) -> list[dict]:
+    rows = []
+    for n in sizes:
+        for seed in seeds:
+            a = ours(n, seed, cap, theta_range=(1.0, 10.0), gamma=GAMMA)
+            b = orca(*a["start"], cap)
+            rows.append({"n": n, "seed": seed, "ours": a, "orca": b})
+            print(n, seed, a["arrived"][-1], a["makespan"], b["arrived"][-1], b["makespan"],
+                  a["closest"], b["closest"], flush=True)  # fmt: skip
+    return rows
+
+
+def circular(sizes, cap) -> list[dict]:
+    """The circular swap, ours, alternating theta (2, 1, 2, 1, ...), both weightings."""
+    rows = []
+    for n in sizes:
+        theta = [2.0 if i % 2 == 0 else 1.0 for i in range(n)]
+        radius = max(5.0, 0.6 * n / np.pi)  # room for n bodies on the circle
+        out = {}
+        for weighting in ("asymmetric", "symmetric"):
+            r = ours(n, 0, cap, "circular_swap", theta=theta, circle_radius=radius,
+                     weighting=weighting, dt=0.01)  # fmt: skip
+            egoist = np.array(theta) < max(theta)
+            out[weighting] = r
+            out[weighting + "_ego"] = float(r["arrival"][egoist].mean())
+            out[weighting + "_alt"] = float(r["arrival"][~egoist].mean())
+        rows.append({"n": n, **out})
+        print("circular", n, out["asymmetric"]["makespan"], out["symmetric"]["makespan"],
+              flush=True)  # fmt: skip
+    return rows
+
+
+def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
+    lines = [
+        "# Liveness: crowds that finish",
+        "",
+        "Written by `python benchmarks/liveness.py`" + (" --quick" if quick else "") + ". Ours:"
+        " `BatchedEnv` with the filter on and the scenario's scripted controller (R-ORCA,"
+        " `docs/liveness.md`); ORCA: pyrvo on the same starts and goals, the same preferred"
+        " velocity. dt = 0.05 s, R = 1 m, u_max = 2 m/s. Makespan: the step the last agent first"
+        " reached its goal (within 0.05 m); '-' where not every agent did within the cap.",
+        "",
+        "## Crowd",
+        "",
+        "| N | seeds | ours: arrived (mean, worst) | ours: makespan (mean, worst) | ORCA: arrived |"
+        " ORCA: makespan (mean, worst) | makespan ours / ORCA (ratio of the means, worst seed;"
+        " seeds where both finished) | closest pair, ours / ORCA [m] |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for n in sorted({r["n"] for r in rows}):
+        rs = [r for r in rows if r["n"] == n]
+        a = np.array([r["ours"]["arrived"][-1] for r in rs])
+        b = np.array([r["orca"]["arrived"][-1] for r in rs])
+        ma = [r["ours"]["makespan"] for r in rs]
+        mb = [r["orca"]["makespan"] for r in rs]
+        both = [(x, y) for x, y in zip(ma, mb, strict=True) if x and y]
+        ratio = (np.mean([x for x, _ in both]) / np.mean([y for _, y in both])) if both else None
+        worst = max((x / y for x, y in both), default=None)
+
+        def fmt(m):
+            ok = [x for x in m if x is not None]
+            if not ok:
+                return "- (none finished)"
+            note = "" if len(ok) == len(m) else f" ({len(ok)} of {len(m)} finished)"
+            return f"{np.mean(ok):.0f}, {max(ok)}{note}"
+
+        lines.append(
+            f"| {n:,} | {len(rs)} | {100 * a.mean():.1f} %, {100 * a.min():.1f} % | {fmt(ma)} | "
+            f"{100 * b.mean():.1f} % | {fmt(mb)} | "
+            + (f"{ratio:.2f}, {worst:.2f} ({len(both)} seeds)" if both else "-")
+            + f" | {min(r['ours']['closest'] for r in rs):.4f} / "
+            f"{min(r['orca']['closest'] for r in rs):.4f} |"
+        )
+    lines += ["", "Per seed, makespan ours / ORCA ('-': not every agent arrived by the cap):", ""]
+    for n in sorted({r["n"] for r in rows}):
+        cells = [f"{r['ours']['makespan'] or '-'} / {r['orca']['makespan'] or '-'}"
+                 for r in rows if r["n"] == n]  # fmt: skip
+        lines.append(f"- N = {n:,}: " + ", ".join(cells))
+    lines += [
+        "",
+        "![share of agents arrived against time](liveness.png)",
+        "",
+        "## Circular swap (alternating theta 2, 1, 2, 1, ...; dt = 0.01)",
+        "",
+        "The paper's 6-agent games complete in 610 (symmetric) and 489 (asymmetric) steps."
+        " Egoists first: the mean arrival step of the egoists (theta 1) against the altruists"
+        " (theta 2).",
+        "",
+        "| N | makespan, asymmetric | makespan, symmetric | egoists / altruists, asymmetric |"
+        " egoists / altruists, symmetric | closest pair [m] |",
+        "|---|---|---|---|---|---|",
+    ]
+    for c in circ:
+        a, s = c["asymmetric"], c["symmetric"]
+        lines.append(
+            f"| {c['n']} | {a['makespan'] or '-'} | {s['makespan'] or '-'} | "
+            f"{c['asymmetric_ego']:.0f} / {c['asymmetric_alt']:.0f} | "
+            f"{c['symmetric_ego']:.0f} / {c['symmetric_alt']:.0f} | "
+            f"{min(a['closest'], s['closest']):.4f} |"
+        )
+    lines += ["", "## Other runs", ""]
+    for name, r in extra.items():
+        lines.append(
+            f"- {name}: arrived {100 * r['arrived'][-1]:.1f} %, makespan {r['makespan'] or '-'},"
+            f" closest pair {r['closest']:.4f} m."
+        )
+    path.write_text("\n".join(lines) + "\n")
+
+
+def plot(rows: list, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sizes = sorted({r["n"] for r in rows})
+    fig, axes = plt.subplots(1, len(sizes), figsize=(4.2 * len(sizes), 3.6), squeeze=False)
+    for ax, n in zip(axes[0], sizes, strict=True):
+        for r in [r for r in rows if r["n"] == n]:
+            for key, color, label in (("ours", "tab:red", "ours (R-ORCA + filter)"),
+                                      ("orca", "tab:blue", "ORCA (pyrvo)")):  # fmt: skip
+                y = r[key]["arrived"]
+                t = DT * np.arange(1, len(y) + 1)
+                ax.plot(t, 100 * y, color=color, alpha=0.6, lw=1,
+                        label=label if r["seed"] == 0 else None)  # fmt: skip
+        ax.set_title(f"crowd, N = {n:,}")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("agents that reached their goals [%]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--quick", action="store_true", help="N = 100, 2 seeds")
+    ap.add_argument("--big", action="store_true", help="add one crowd of 10,000")
+    ap.add_argument("--out", type=Path, default=RESULTS / "liveness.md")
+    args = ap.parse_args(argv)
+    seeds = range(2) if args.quick else range(10)
+    sizes = (100,) if args.quick else (100, 1000)
+    rows = crowds(sizes, seeds, 4000)
+    if args.big:
+        rows += crowds((10_000,), range(1), 6000)
+    circ = circular((6, 12) if args.quick else (6, 12, 24, 64), 6000)
+    extra = {
+        "crowd N = 100, seed 0, move-to-goal (today's controller, kept by name)":
+            ours(100, 0, 4000, nominal="move_to_goal", theta_range=(1.0, 10.0), gamma=GAMMA),
+        "crowd N = 100, seed 0, the scenario's gamma (10, gamma dt = 0.5)":
+            ours(100, 0, 4000, theta_range=(1.0, 10.0)),
+        "doorway (8 agents), seed 0": ours(8, 0, 4000, "doorway"),
+        "doorway (16 agents), seed 0": ours(16, 0, 4000, "doorway"),
+    }  # fmt: skip
+    write(args.out, rows, circ, extra, args.quick)
+    plot(rows, args.out.with_suffix(".png"))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,170 @@
+"""R-ORCA: ORCA's reciprocal half-planes with the R-SVO weights in place of its fixed one-half
+split, as an active nominal controller for single integrators (``docs/liveness.md``).
+
+ORCA (van den Berg et al., 2011) gives agent i, for each neighbour j within ``neighbor_dist``,
+the smallest change ``u`` of the relative velocity that leaves the truncated velocity obstacle
+(horizon ``tau``), and asks i to take half of it: the half-plane of velocities v with
+``(v - (v_i + u / 2)) . n >= 0`` (``n`` the outward normal). Here agent i takes the share
+``1 - omega_ij`` (eq. ``rorca``): the egoist (larger omega) does less of the avoidance, and
+``omega = 1/2`` is ORCA. Unlike a filter's rows these are *active*: an agent parked on its goal
+whose velocity obstacle holds 0 must step aside, which is what makes crowds finish. The
+velocity is the one closest to the preferred velocity within the half-planes and the speed
+limit (an octagon inscribed in the disk), solved exactly by ``rsvo_env.solvers.exact``; an
+empty polygon gives the least-violating velocity (ORCA's third linear program). The R-CBF
+filter on top keeps the guarantee whatever this controller proposes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from rsvo_env import pairs
+from rsvo_env.planar import clip_norm
+from rsvo_env.responsibility import Weighting, scored_weight, symmetric_envs, weight_matrix
+from rsvo_env.solvers import exact
+
+# below this fraction of its preferred speed an agent counts as held still (it sidesteps)
+SIDESTEP = 0.05
+_OCTAGON = np.stack(
+    [np.cos(np.arange(8) * np.pi / 4), np.sin(np.arange(8) * np.pi / 4)], axis=-1
+)
+
+
+@njit(cache=True)
+def _half_planes(x, v, radii, I, J, share, tau, dt):
+    """Both directed half-planes of each pair (I, J): rows ``A . v <= b`` for agent I (first
+    P) and agent J (last P), ``share`` (P, 2) each side's part of the avoidance."""
+    P = I.shape[0]
+    A = np.empty((2 * P, 2))
+    b = np.empty(2 * P)
+    inv_tau = 1.0 / tau
+    for p in range(P):
+        i, j = I[p], J[p]
+        for side in range(2):
+            me, other = (i, j) if side == 0 else (j, i)
+            rx, ry = x[other, 0] - x[me, 0], x[other, 1] - x[me, 1]
+            wx0, wy0 = v[me, 0] - v[other, 0], v[me, 1] - v[other, 1]
+            R = radii[me] + radii[other]
+            d2, R2 = rx * rx + ry * ry, R * R
+            if d2 > R2:
+                wx, wy = wx0 - inv_tau * rx, wy0 - inv_tau * ry
+                w2 = wx * wx + wy * wy
+                dot1 = wx * rx + wy * ry
+                if dot1 < 0.0 and dot1 * dot1 > R2 * w2:  # the cutoff circle
+                    wl = np.sqrt(w2)
+                    ux, uy = wx / wl, wy / wl
+                    dx, dy = uy, -ux
+                    s = R * inv_tau - wl
+                    cx, cy = s * ux, s * uy
+                else:  # a leg
+                    leg = np.sqrt(d2 - R2)
+                    if rx * wy - ry * wx > 0.0:
+                        dx, dy = (rx * leg - ry * R) / d2, (rx * R + ry * leg) / d2
+                    else:
+                        dx, dy = -(rx * leg + ry * R) / d2, -(-rx * R + ry * leg) / d2
+                    dot2 = wx0 * dx + wy0 * dy
+                    cx, cy = dot2 * dx - wx0, dot2 * dy - wy0
+            else:  # overlapping: leave within one step
+                wx, wy = wx0 - rx / dt, wy0 - ry / dt
+                wl = np.sqrt(wx * wx + wy * wy)
+                ux, uy = (wx / wl, wy / wl) if wl > 0.0 else (1.0, 0.0)
+                dx, dy = uy, -ux
+                s = R / dt - wl
+                cx, cy = s * ux, s * uy
+            px, py = v[me, 0] + share[p, side] * cx, v[me, 1] + share[p, side] * cy
+            k = p + side * P
+            # the half-plane det(d, point - v) <= 0 as a row
+            A[k, 0], A[k, 1] = dy, -dx
+            b[k] = dy * px - dx * py
+    return A, b
+
+
+def pair_weights(
+    theta: NDArray, modes: list[Weighting], I: NDArray, J: NDArray
+) -> NDArray[np.float64]:
+    """(P, 2) omega_IJ, omega_JI of flat pairs from the scores (E, N) and each env's weighting
+    (a callable one through its matrix)."""
+    E, n = theta.shape
+    if any(callable(m) for m in modes):
+        W = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
+        return pairs.omega_pairs(W.reshape(E * n, n), I, J, n)
+    th = theta.reshape(-1)
+    w = scored_weight(th[I], th[J], symmetric_envs(modes)[I // n])
+    return np.stack([w, 1.0 - w], axis=1)
+
+
+def rorca_velocities(
+    positions: NDArray,
+    velocities: NDArray,
+    preferred: NDArray,
+    radii: NDArray,
+    theta: NDArray,
+    modes: list[Weighting],
+    u_max: float,
+    dt: float,
+    tau: float = 2.0,
+    neighbor_dist: float | None = None,
+    max_neighbors: int | None = 10,
+    parked: NDArray | None = None,
+) -> NDArray[np.float64]:
+    """Eq. ``rorca``: each agent's velocity (E, N, 2) closest to ``preferred`` within its R-ORCA
+    half-planes against the nearest ``max_neighbors`` (None: all) of the neighbours within
+    ``neighbor_dist`` (default ``5 (r_i + r_j)`` of the largest pair), and the speed limit
+    ``u_max`` (ORCA's defaults: 10 neighbours, 5 pair distances, horizon 2 s). ``radii``
+    (E, N) or (N,); the weights come from the scores ``theta`` (E, N) and each env's weighting
+    ``modes`` (``"symmetric"``: ORCA); ``parked`` (E, N): agents at their goals, which take at
+    least half of the avoidance from agents en route."""
+    E, n = positions.shape[:2]
+    radii = np.broadcast_to(radii, (E, n))
+    if neighbor_dist is None:
+        neighbor_dist = 10.0 * float(radii.max())
+    I, J = pairs.candidate_pairs(positions, neighbor_dist)
+    w = pair_weights(theta, modes, I, J)
+    x = positions.reshape(E * n, 2)
+    v = velocities.reshape(E * n, 2)
+    share = 1.0 - w
+    if parked is not None:
+        # an agent parked on its goal takes at least half of the avoidance from one en route:
+        # an egoist at rest would otherwise stand as a wall (the shares still sum to 1)
+        park = np.ascontiguousarray(parked).reshape(-1)
+        first = park[I] & ~park[J]
+        second = park[J] & ~park[I]
+        share[:, 0] = np.where(first, np.maximum(share[:, 0], 0.5), share[:, 0])
+        share[:, 1] = np.where(second, np.maximum(share[:, 1], 0.5), share[:, 1])
+        share[:, 1] = np.where(first, 1.0 - share[:, 0], share[:, 1])
+        share[:, 0] = np.where(second, 1.0 - share[:, 1], share[:, 0])
+    A, b = _half_planes(x, v, np.ascontiguousarray(radii).reshape(-1), I, J, share, float(tau),
+                        float(dt))  # fmt: skip
+    M = E * n
+    owner = np.concatenate([I, J])
+    if max_neighbors is not None and len(owner):
+        # ORCA's neighbour rule: each agent's nearest max_neighbors within neighbor_dist
+        d2 = ((x[I] - x[J]) ** 2).sum(axis=-1)
+        by = np.lexsort((np.concatenate([d2, d2]), owner))
+        first = np.searchsorted(owner[by], owner[by], side="left")
+        keep = np.zeros(len(owner), dtype=bool)
+        keep[by] = np.arange(len(by)) - first < max_neighbors
+        owner, A, b = owner[keep], A[keep], b[keep]
+    owner = np.concatenate([owner, np.repeat(np.arange(M), 8)])
+    A = np.concatenate([A, np.tile(_OCTAGON, (M, 1))])
+    b = np.concatenate([b, np.full(8 * M, u_max * np.cos(np.pi / 8))])
+    order = np.argsort(owner, kind="stable")
+    offsets = np.zeros(M + 1, dtype=np.int64)
+    offsets[1:] = np.cumsum(np.bincount(owner, minlength=M))
+    box = np.array([u_max, u_max])
+    rows = (A[order], b[order], offsets, -box, box)
+    pref = preferred.reshape(M, 2)
+    out = exact.solve_csr(pref, *rows)[0]
+    # an agent the half-planes hold still while it wants to move (a jam that is symmetric, as
+    # in a ring around a common goal) sidesteps: the velocity closest to its preferred one
+    # turned to its right, which the half-planes of touching neighbours let it take
+    speed = np.sqrt((pref * pref).sum(axis=-1))
+    held = np.sqrt((out * out).sum(axis=-1)) < SIDESTEP * speed
+    if held.any():
+        right = np.stack([pref[:, 1], -pref[:, 0]], axis=-1)
+        out = np.where(held[:, None], exact.solve_csr(right, *rows)[0], out)
+    # where the half-planes leave no room the least-violating point may lie past the octagon
+    # (its rows are relaxed too): the speed limit holds regardless
+    return clip_norm(out, u_max).reshape(E, n, 2)

@@ -1,0 +1,134 @@
+"""R-ORCA, the active scripted controller (``rsvo_env/rorca.py``, ``docs/liveness.md``): its
+half-planes are ORCA's with the R-SVO shares (reciprocal: any pair of velocities in both leaves
+no collision within the horizon), the egoist does less of the avoidance, and behind the
+unchanged filter crowds finish with no collision."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import rsvo_env
+from rsvo_env import rorca
+from rsvo_env.vector import BatchedEnv
+
+coords = st.floats(-10, 10)
+
+
+def rows_of(x, v, radii, share, tau=2.0, dt=0.05):
+    I, J = np.array([0]), np.array([1])
+    return rorca._half_planes(x, v, radii, I, J, share, tau, dt)
+
+
+@settings(deadline=None)  # the first example compiles the kernel
+@given(px=coords, py=coords, vx=st.floats(-3, 3), vy=st.floats(-3, 3), w=st.floats(0.0, 1.0),
+       a=st.floats(-3, 3), b=st.floats(-3, 3), c=st.floats(-3, 3), d=st.floats(-3, 3))  # fmt: skip
+def test_any_pair_of_velocities_in_both_half_planes_is_collision_free_within_tau(
+    px, py, vx, vy, w, a, b, c, d
+):
+    """ORCA's reciprocity with the shares (1 - omega, omega) that sum to 1: if agent i's and
+    agent j's velocities each meet their own half-plane, the pair does not collide within tau."""
+    x = np.array([[0.0, 0.0], [px, py]])
+    R, tau = 1.0, 2.0
+    if np.hypot(px, py) <= R * 1.001:
+        return
+    v = np.array([[vx, vy], [-vy, vx]])
+    A, b_ = rows_of(x, v, np.full(2, R / 2), np.array([[1.0 - w, w]]), tau)
+    # project two candidate velocities onto their own half-planes (a feasible choice each)
+    cand = np.array([[a, b], [c, d]])
+    for k in range(2):
+        viol = A[k] @ cand[k] - b_[k]
+        if viol > 0:
+            cand[k] -= viol * A[k] / (A[k] @ A[k])
+    rel_p = x[1] - x[0]
+    rel_v = cand[0] - cand[1]
+    # the smallest distance over [0, tau] of the straight-line relative motion
+    t = np.clip(rel_p @ rel_v / max(rel_v @ rel_v, 1e-300), 0.0, tau)
+    assert np.linalg.norm(rel_p - t * rel_v) >= R * (1 - 1e-6)
+
+
+def test_the_egoist_takes_the_smaller_share_and_half_is_orca():
+    """Head-on at equal speeds: with omega = 1/2 both move their half-plane by the same amount
+    (ORCA); the egoist (larger omega) is asked to change its velocity less."""
+    x = np.array([[0.0, 0.0], [4.0, 0.1]])
+    v = np.array([[1.0, 0.0], [-1.0, 0.0]])
+    radii = np.full(2, 0.5)
+
+    def change(share):
+        A, b = rows_of(x, v, radii, np.array([share]))
+        # how far each agent's current velocity lies outside its half-plane
+        return [(A[k] @ v[k] - b[k]) / np.linalg.norm(A[k]) for k in range(2)]
+
+    half = change([0.5, 0.5])
+    assert half[0] == pytest.approx(half[1], rel=1e-9) and half[0] > 0
+    ego = change([0.2, 0.8])  # agent 0 is the egoist: it takes 0.2 of the avoidance
+    assert ego[0] < half[0] < ego[1]
+    assert ego[0] + ego[1] == pytest.approx(half[0] + half[1], rel=1e-9)
+
+
+def test_rorca_velocities_respect_the_speed_limit_and_reduce_to_preferred_alone():
+    rng = np.random.default_rng(0)
+    E, n = 3, 40
+    x = rng.uniform(-20, 20, (E, n, 2))
+    pref = rng.normal(size=(E, n, 2)) * 3.0
+    modes = ["asymmetric"] * E
+    out = rorca.rorca_velocities(x, np.zeros((E, n, 2)), pref, np.full(n, 0.5),
+                                 rng.uniform(1, 10, (E, n)), modes, 2.0, 0.05)  # fmt: skip
+    assert (np.linalg.norm(out, axis=-1) <= 2.0 * (1 + 1e-12)).all()
+    alone = rorca.rorca_velocities(x[:, :1], np.zeros((E, 1, 2)), pref[:, :1] * 0.1,
+                                   np.full(1, 0.5), np.ones((E, 1)), modes, 2.0, 0.05)  # fmt: skip
+    assert np.allclose(alone, pref[:, :1] * 0.1)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_crowd_of_100_finishes_behind_the_filter_with_no_collision(seed):
+    """The crowd's scripted controller (R-ORCA, its default) behind the unchanged filter, dt =
+    0.05 and gamma dt = 1 (as benchmarks/liveness.py and the training configs run it): every
+    agent reaches its goal, no pair ever closer than R (1 - 1e-9)."""
+    env = BatchedEnv("crowd", num_envs=1, safety_filter=True, num_agents=100, max_steps=3000,
+                     dt=0.05, gamma=20.0, theta_range=(1.0, 10.0))  # fmt: skip
+    env.reset(seed=seed)
+    reached = np.zeros(100, dtype=bool)
+    for _ in range(3000):
+        _, _, term, trunc, info = env.step(env.nominal_actions())
+        assert info["min_distance"].min() >= 1.0 - 1e-9
+        reached |= info["at_goal"][0]
+        if reached.all() or term.any() or trunc.any():
+            break
+    assert reached.all(), f"{int((~reached).sum())} agents never reached their goals"
+
+
+def test_move_to_goal_is_kept_by_name_and_rorca_needs_velocity_inputs():
+    env = rsvo_env.parallel_env("crowd", num_agents=4, nominal="move_to_goal")
+    env.reset(seed=0)
+    base = env.unwrapped
+    s = base.sim.state
+    mtg = base.sim.scenario.move_to_goal(s, True, base.sim.scenario.u_max)
+    assert np.array_equal(base.sim.nominal_controls(), mtg)
+    with pytest.raises(ValueError, match="nominal = 'rorca' steers velocities"):
+        rsvo_env.parallel_env("ramp_merge", nominal="rorca")
+    with pytest.raises(ValueError, match="crowd.nominal = 'orca'"):
+        rsvo_env.parallel_env("crowd", nominal="orca")
+
+
+def test_deadlock_metrics_count_arrivals_makespan_and_held_agents():
+    """``deadlocked``: short of the goal, no progress for 10 s; ``episode_arrived``: agents
+    that reached their goals so far; ``episode_makespan``: the step the last did (-1 before)."""
+    env = BatchedEnv("crowd", num_envs=1, num_agents=6, dt=0.1, nominal="move_to_goal")
+    env.reset(seed=3)
+    hold = np.zeros((1, 6, 2))
+    for t in range(1, 101):
+        _, _, _, _, info = env.step(hold)
+        away = ~info["at_goal"]
+        assert (info["deadlocked"] == (away & (t >= 100))).all()
+    assert info["episode_arrived"][0] == 0 and info["episode_makespan"][0] == -1
+    arrived = [0]
+    for _ in range(400):
+        _, _, term, trunc, info = env.step(env.nominal_actions())
+        assert not info["deadlocked"].any()  # moving again: progress resets the clock
+        arrived.append(int(info["episode_arrived"][0]))
+        if arrived[-1] == 6:
+            break
+    assert arrived == sorted(arrived) and arrived[-1] == 6
+    # the last arrival ends the episode at this very step (all six at their goals)
+    assert info["episode_makespan"][0] == 100 + len(arrived) - 1 == info["episode_steps"][0]
