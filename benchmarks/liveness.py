@@ -122,9 +122,10 @@ def circular_section(circ: list) -> list[str]:
     lines = [
         "## Circular swap (alternating theta 2, 1, 2, 1, ...; dt = 0.01)",
         "",
-        "The paper's 6-agent games complete in 610 (symmetric) and 489 (asymmetric) steps."
-        " Egoists first: the mean arrival step of the egoists (theta 1) against the altruists"
-        " (theta 2).",
+        "For the 6-agent game the paper's controller (move-to-goal with the right-hand rule,"
+        " `rsvo reproduce`) completes in 610 (symmetric) and 489 (asymmetric) steps; the paper"
+        " reports 620 and 415. Egoists first: the mean arrival step of the egoists (theta 1)"
+        " against the altruists (theta 2).",
         "",
         "| N | makespan, asymmetric | makespan, symmetric | egoists / altruists, asymmetric |"
         " egoists / altruists, symmetric | closest pair [m] |",
