@@ -7,6 +7,7 @@ Pairs are flat agent indices ``e * N + i`` with I < J, in a fixed order, and nev
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 
 import numpy as np
 from numba import njit
@@ -15,7 +16,13 @@ from scipy.spatial import cKDTree
 
 from rsvo_env import grid
 from rsvo_env.neighbors import DENSE_MAX_AGENTS, env_offsets
-from rsvo_env.responsibility import Weighting, pair_omega, weight_matrix
+from rsvo_env.responsibility import (
+    Weighting,
+    pair_omega,
+    scored_weight,
+    symmetric_envs,
+    weight_matrix,
+)
 
 # (floor (E, N, K), group (E, N), required pairs (P, 2)): see weight_floor and theta_floor
 Floor = tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]
@@ -274,3 +281,17 @@ def omega_pairs(omega, I, J, n):
         w[p, 0] = omega[I[p], J[p] % n]
         w[p, 1] = omega[J[p], I[p] % n]
     return w
+
+
+def weights_of(
+    theta: NDArray, modes: Sequence[Weighting], I: NDArray, J: NDArray
+) -> NDArray[np.float64]:
+    """(P, 2) omega_IJ, omega_JI of flat pairs from the scores (E, N) and each env's weighting:
+    from the scores where every one is named, else through each env's matrix."""
+    E, n = theta.shape
+    if any(callable(m) for m in modes):
+        W = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
+        return omega_pairs(W.reshape(E * n, n), I, J, n)
+    th = theta.reshape(-1)
+    w = scored_weight(th[I], th[J], symmetric_envs(modes)[I // n])
+    return np.stack([w, 1.0 - w], axis=1)

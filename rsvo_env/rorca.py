@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from rsvo_env import pairs
 from rsvo_env.planar import clip_norm
-from rsvo_env.responsibility import Weighting, scored_weight, symmetric_envs, weight_matrix
+from rsvo_env.responsibility import Weighting
 from rsvo_env.solvers import exact
 
 # below this fraction of its preferred speed an agent counts as held still (it sidesteps)
@@ -81,20 +81,6 @@ def _half_planes(x, v, radii, I, J, share, tau, dt):
     return A, b
 
 
-def pair_weights(
-    theta: NDArray, modes: list[Weighting], I: NDArray, J: NDArray
-) -> NDArray[np.float64]:
-    """(P, 2) omega_IJ, omega_JI of flat pairs from the scores (E, N) and each env's weighting
-    (a callable one through its matrix)."""
-    E, n = theta.shape
-    if any(callable(m) for m in modes):
-        W = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
-        return pairs.omega_pairs(W.reshape(E * n, n), I, J, n)
-    th = theta.reshape(-1)
-    w = scored_weight(th[I], th[J], symmetric_envs(modes)[I // n])
-    return np.stack([w, 1.0 - w], axis=1)
-
-
 def rorca_velocities(
     positions: NDArray,
     velocities: NDArray,
@@ -121,7 +107,7 @@ def rorca_velocities(
     if neighbor_dist is None:
         neighbor_dist = 10.0 * float(radii.max())
     I, J = pairs.candidate_pairs(positions, neighbor_dist)
-    w = pair_weights(theta, modes, I, J)
+    w = pairs.weights_of(theta, modes, I, J)
     x = positions.reshape(E * n, 2)
     v = velocities.reshape(E * n, 2)
     share = 1.0 - w

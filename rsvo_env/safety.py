@@ -34,9 +34,7 @@ from rsvo_env.planar import norm
 from rsvo_env.responsibility import (
     min_pair_weight,
     pair_omega,
-    scored_weight,
     smallest_weight,
-    symmetric_envs,
     validate_weight_matrix,
     weight_matrix,
 )
@@ -102,9 +100,7 @@ class SafetyFilter:
         mode = self.config.weighting
         n = theta.shape[-1]
         if omega is None and weighting is not None:
-            th = theta.reshape(-1)
-            w = scored_weight(th[I], th[J], symmetric_envs(weighting)[I // n])
-            return np.stack([w, 1.0 - w], axis=1)
+            return pairs.weights_of(theta.reshape(-1, n), weighting, I, J)
         if omega is None and callable(mode):
             omega = weight_matrix(theta, mode)
         if omega is not None:
