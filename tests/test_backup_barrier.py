@@ -32,7 +32,7 @@ def config(dt, gamma_dt, scale=1.0, **kw):
 
 
 @given(s=st.floats(0.0, 50.0), angle=st.floats(0, 2 * np.pi), c=st.floats(0.05, 10.0),
-       dt=st.floats(1e-3, 0.5), scale=scales)  # fmt: skip
+       dt=st.floats(1e-3, 2.0), scale=scales)  # fmt: skip
 def test_the_backup_gives_up_at_least_the_reach_it_travels(s, angle, c, dt, scale):
     """Lemma 1: |p+ - p| + L(|v+|) <= L(|v|) under the backup, which stays in the disk |a| <= c."""
     v = np.array([[np.cos(angle), np.sin(angle)]]) * s * scale
@@ -46,7 +46,7 @@ def test_the_backup_gives_up_at_least_the_reach_it_travels(s, angle, c, dt, scal
 
 
 @given(s=st.floats(0.0, 30.0), angle=st.floats(0, 2 * np.pi), c=st.floats(0.05, 10.0),
-       dt=st.floats(1e-3, 0.5), r=unit, x=unit, y=unit, scale=scales)  # fmt: skip
+       dt=st.floats(1e-3, 2.0), r=unit, x=unit, y=unit, scale=scales)  # fmt: skip
 def test_the_remainder_bounds_the_reach_over_the_trust_box(s, angle, c, dt, r, x, y, scale):
     """Lemma 3: L(|v + dt a|) <= L(|v + dt beta|) + g . (a - beta) + R(rho) for every a with
     |a - beta|_inf <= rho (here up to the box's far corner)."""
@@ -63,7 +63,7 @@ def test_the_remainder_bounds_the_reach_over_the_trust_box(s, angle, c, dt, r, x
     assert lhs <= bound + 1e-12 * (abs(lhs) + scale * dt * dt * c)
 
 
-@given(tau=st.floats(0.0, 1e6), c=st.floats(1e-3, 1e3), dt=st.floats(1e-3, 0.5))
+@given(tau=st.floats(0.0, 1e6), c=st.floats(1e-3, 1e3), dt=st.floats(1e-3, 2.0))
 def test_the_trust_radius_inverts_the_remainder(tau, c, dt):
     rho = bb.trust_radius(np.array([tau]), np.array([c]), dt)
     assert rho[0] >= 0
@@ -109,24 +109,26 @@ def at_zero(p, v, radii, a, dt):
     return centre + q * need.max(axis=1)[:, None, None]
 
 
-FAMILIES = [("head-on", 2, 1500), ("crossing", 2, 1500), ("overtaking", 2, 1500)] + [
-    ("converging", k, 925) for k in range(3, 9)
+FAMILIES = [("head-on", 2, 1505), ("crossing", 2, 1505), ("overtaking", 2, 1505)] + [
+    ("converging", k, 931) for k in range(3, 9)
 ]
 
 
 @pytest.mark.parametrize("family, k, E", FAMILIES)
 def test_every_qp_is_feasible_in_states_built_at_h_zero(family, k, E):
-    """10,050 clusters in all, each with its tightest pair at h = 0 (the rest >= 0): with any
+    """10,101 clusters in all, each with its tightest pair at h = 0 (the rest >= 0): with any
     nominal every agent's QP is feasible, and after the step every pair keeps
-    h+ >= (1 - gamma dt) h, so none comes below r_i + r_j. dt 0.01 - 0.1, gamma dt up to 1,
+    h+ >= (1 - gamma dt) h, so none comes below r_i + r_j. dt 0.01 - 2, gamma dt up to 1,
     millimetres to kilometres, theta 0 - 10 (with zeros)."""
     rng = np.random.default_rng(k * 31 + len(family))
     I, J = np.triu_indices(k, 1)
     feasible_all, worst_drop = True, np.inf
     for dt, gamma_dt, scale in (
-        [(0.01, 1.0, 1e-3), (0.05, 0.1, 1.0), (0.1, 1.0, 1e3), (0.1, 0.5, 1.0), (0.02, 0.7, 1e3)]
+        # the backup barrier accepts any dt: steps far longer than a body's braking time too
+        [(0.01, 1.0, 1e-3), (0.05, 0.1, 1.0), (0.1, 1.0, 1e3), (0.1, 0.5, 1.0), (0.02, 0.7, 1e3),
+         (0.5, 1.0, 1.0), (2.0, 0.5, 1e-3)]
     ):
-        m = E // 5
+        m = E // 7
         p, v, radii, a = cluster(rng, family, m, k, scale)
         p = at_zero(p, v, radii, a, dt)
         theta = rng.uniform(0, 10, (m, k)) * (rng.uniform(size=(m, k)) > 0.1)
