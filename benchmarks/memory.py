@@ -68,11 +68,11 @@ def resident_child(n: int, case: str) -> None:
     from rsvo_env.vector import BatchedEnv
 
     # compile every kernel on a small crowd of the same kind, so what is measured is the crowd's own
-    small = BatchedEnv("crowd", num_envs=1, num_agents=200)
+    small = BatchedEnv("crowd", num_envs=1, nominal="move_to_goal", num_agents=200)
     small.reset(seed=0, options={"theta": scores(200, case)})
     small.step(small.nominal_actions())
     before = resident_mb()
-    env = BatchedEnv("crowd", num_envs=1, num_agents=n)
+    env = BatchedEnv("crowd", num_envs=1, nominal="move_to_goal", num_agents=n)
     env.reset(seed=0, options={"theta": scores(n, case)})
     for _ in range(5):
         env.step(env.nominal_actions())
@@ -104,7 +104,8 @@ def step_ratios(n: int, blocks: int = 3, steps: int = 3) -> dict[str, float]:
 
     envs = {}
     for case in CASES:
-        env = BatchedEnv("crowd", num_envs=1, num_agents=n, theta_range=(1.0, 10.0))
+        env = BatchedEnv("crowd", num_envs=1, num_agents=n, theta_range=(1.0, 10.0),
+                         nominal="move_to_goal")
         env.reset(seed=0, options={"theta": scores(n, case)})
         env.step(env.nominal_actions())
         envs[case] = env

@@ -213,7 +213,8 @@ def big_crowd(mode: str, n: int, steps: int) -> dict:
     if mode == "env":
         from rsvo_env.vector import BatchedEnv
 
-        venv = BatchedEnv("crowd", num_envs=1, num_agents=n, max_cycles=steps + 1)
+        venv = BatchedEnv("crowd", num_envs=1, num_agents=n, max_cycles=steps + 1,
+                          nominal="move_to_goal")  # the move-to-goal of section 1
         venv.reset(seed=0)
         setup, peak = time.perf_counter() - t0, max(peak, rss())
         smallest, t1 = np.inf, time.perf_counter()
