@@ -259,7 +259,7 @@ class EpisodeMetrics:
             int(self.collision_steps[e]),
             int(self.infeasible[e]),
             int((self.arrival[e] >= 0).sum()),
-            int(self.arrival[e].max()) if (self.arrival[e] >= 0).all() else -1,
+            int(self.makespan[e]),
         )
 
     def summary(self, e: int = 0) -> dict[str, Any]:

@@ -115,12 +115,10 @@ def rorca_velocities(
         # an agent parked on its goal takes at least half of the avoidance from one en route:
         # an egoist at rest would otherwise stand as a wall (the shares still sum to 1)
         park = np.ascontiguousarray(parked).reshape(-1)
-        first = park[I] & ~park[J]
-        second = park[J] & ~park[I]
-        share[:, 0] = np.where(first, np.maximum(share[:, 0], 0.5), share[:, 0])
-        share[:, 1] = np.where(second, np.maximum(share[:, 1], 0.5), share[:, 1])
-        share[:, 1] = np.where(first, 1.0 - share[:, 0], share[:, 1])
-        share[:, 0] = np.where(second, 1.0 - share[:, 1], share[:, 0])
+        s = share[:, 0]
+        s = np.where(park[I] & ~park[J], np.maximum(s, 0.5), s)
+        s = np.where(park[J] & ~park[I], np.minimum(s, 0.5), s)
+        share = np.stack([s, 1.0 - s], axis=1)
     A, b = _half_planes(x, v, np.ascontiguousarray(radii).reshape(-1), I, J, share, float(tau),
                         float(dt))  # fmt: skip
     M = E * n
