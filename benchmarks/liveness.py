@@ -13,7 +13,8 @@ move-to-goal (today's controller, kept by name) at N = 100.
 
 Writes ``benchmarks/results/liveness.md`` and ``liveness.png``.
 
-    python benchmarks/liveness.py [--quick] [--big]
+    python benchmarks/liveness.py [--quick] [--circular-only] [--symmetric-only] [--big]
+        [--learned RUN]
 """
 
 from __future__ import annotations
@@ -32,6 +33,10 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 DT = 0.05
 GAMMA = 20.0  # gamma dt = 1, as the training configs run the crowd
+BIG_HEADING = "## Crowd of 10,000"
+BIG_CAP = 6000
+SYMMETRIC_HEADING = "## Crowd of 1,000, symmetric weighting"
+LEARNED_HEADING = "## The learned residual at scale"
 
 
 def ours(n: int, seed: int, cap: int, scenario: str = "crowd", **kw) -> dict:
@@ -86,11 +91,11 @@ def _makespan(arrived: list[int], n: int) -> int | None:
     return len(arrived) if arrived and arrived[-1] == n else None
 
 
-def crowds(sizes, seeds, cap) -> list[dict]:
+def crowds(sizes, seeds, cap, weighting: str = "asymmetric") -> list[dict]:
     rows = []
     for n in sizes:
         for seed in seeds:
-            a = ours(n, seed, cap, theta_range=(1.0, 10.0), gamma=GAMMA)
+            a = ours(n, seed, cap, theta_range=(1.0, 10.0), gamma=GAMMA, weighting=weighting)
             b = orca(*a["start"], cap)
             rows.append({"n": n, "seed": seed, "ours": a, "orca": b})
             print(n, seed, a["arrived"][-1], a["makespan"], b["arrived"][-1], b["makespan"],
@@ -142,18 +147,9 @@ def circular_section(circ: list) -> list[str]:
     return lines
 
 
-def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
+def crowd_table(rows: list) -> list[str]:
+    """The crowd table and the per-seed makespans of ``rows`` (any sizes)."""
     lines = [
-        "# Liveness: crowds that finish",
-        "",
-        "Written by `python benchmarks/liveness.py`" + (" --quick" if quick else "") + ". Ours:"
-        " `BatchedEnv` with the filter on and the scenario's scripted controller (R-ORCA,"
-        " `docs/liveness.md`); ORCA: pyrvo on the same starts and goals, the same preferred"
-        " velocity. dt = 0.05 s, R = 1 m, u_max = 2 m/s. Makespan: the step the last agent first"
-        " reached its goal (within 0.05 m); '-' where not every agent did within the cap.",
-        "",
-        "## Crowd",
-        "",
         "| N | seeds | ours: arrived (mean, worst) | ours: makespan (mean, worst) |"
         " ORCA: arrived (mean, worst) |"
         " ORCA: makespan (mean, worst) | makespan ours / ORCA (ratio of the means, worst seed;"
@@ -189,7 +185,117 @@ def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
         cells = [f"{r['ours']['makespan'] or '-'} / {r['orca']['makespan'] or '-'}"
                  for r in rows if r["n"] == n]  # fmt: skip
         lines.append(f"- N = {n:,}: " + ", ".join(cells))
-    lines += [
+    return lines
+
+
+def share_at(rows: list, seconds: tuple[float, ...]) -> list[str]:
+    """The share of agents arrived at given times, ours and ORCA's, one line a run."""
+    lines = ["| N | seed | " + " | ".join(f"{t:.0f} s, ours / ORCA" for t in seconds) + " |",
+             "|---|---|" + "---|" * len(seconds)]  # fmt: skip
+    for r in rows:
+        cells = []
+        for t in seconds:
+            k = int(round(t / DT)) - 1
+            a, b = (r[key]["arrived"] for key in ("ours", "orca"))
+            cells.append(
+                f"{100 * a[min(k, len(a) - 1)]:.1f} % / {100 * b[min(k, len(b) - 1)]:.1f} %"
+            )
+        lines.append(f"| {r['n']:,} | {r['seed']} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def big_section(rows: list) -> list[str]:
+    return [
+        BIG_HEADING,
+        "",
+        f"Written by `python benchmarks/liveness.py --big` (one seed, cap {BIG_CAP} steps);"
+        " the same setting as above.",
+        "",
+        *crowd_table(rows),
+        "",
+        "Share of agents at their goals against time:",
+        "",
+        *share_at(rows, (25.0, 50.0, 75.0, 100.0, 150.0, BIG_CAP * DT)),
+        "",
+        "![share of agents arrived against time, N = 10,000](liveness_10000.png)",
+        "",
+    ]
+
+
+def symmetric_section(rows: list) -> list[str]:
+    return [
+        SYMMETRIC_HEADING,
+        "",
+        "Written by `python benchmarks/liveness.py --symmetric-only`: the crowds of 1,000 above"
+        " (the same seeds, starts, goals and theta draws) under the symmetric weighting, omega ="
+        " 1/2 for every pair in the filter and in R-ORCA (ORCA's own split). What the"
+        " responsibility weighting costs in a dense crowd: an agent's filter row lets it close"
+        " on a neighbour at most omega gamma h / (2 |d|) (its own share of the pair's slack,"
+        " whatever the neighbour does), so an altruist with omega = 0.02 (theta 10 against 1)"
+        " follows an egoist at full speed only from about 10 m behind (`docs/liveness.md`).",
+        "",
+        *crowd_table(rows),
+        "",
+    ]
+
+
+def learned(run: Path) -> list[str]:
+    """The learned residual of ``run`` (trained on the crowd with R-ORCA under it) evaluated at
+    the size it was trained at and in crowds of 100 and 1,000, beside the scripted controller on
+    the same seeds (``training.evaluate`` with ``--set env.num_agents=N``)."""
+    from training.evaluate import evaluate_loaded, load_model
+
+    model = run / "best_model.zip"
+    lines = [
+        LEARNED_HEADING,
+        "",
+        f"Written by `python benchmarks/liveness.py --learned {run}` after"
+        f" `python -m training.train --scenario crowd --set env.nominal=rorca"
+        f" --set validation.episodes=100 --seed 0 --out {run}`: the residual policy trained on"
+        " crowds of 12 (the config `training/configs/crowd.yaml`: dt 0.1, gamma dt = 1, theta"
+        " 1..10), its validation-best model evaluated unchanged in larger crowds (its observation"
+        " is local), seeds 1000 and up, against the scripted controller (R-ORCA, a zero"
+        " residual) on the same seeds. Success: every agent at its goal within the cap.",
+        "",
+        "| N | episodes | cap [s] | success, policy / scripted | agents arrived, policy /"
+        " scripted | completion [s], policy / scripted | collisions | closest pair [m] |"
+        " infeasible steps |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for n, episodes, cap in ((12, 100, 1000), (100, 100, 1000), (1000, 5, 3000)):
+        policy, cfg = load_model(model, [f"env.num_agents={n}", f"validation.max_steps={cap}"])
+        r = evaluate_loaded(policy, cfg, model, episodes, 1000, compare_scripted=True)
+        a, b = r["policy"], r["scripted"]
+        lines.append(
+            f"| {n:,} | {episodes} | {cap * cfg['env']['dt']:.0f} | {100 * a['success_rate']:.0f} %"
+            f" / {100 * b['success_rate']:.0f} % | {100 * a['arrived']:.1f} % /"
+            f" {100 * b['arrived']:.1f} % | {_seconds(a)} / {_seconds(b)}"
+            f" | {a['collisions']} / {b['collisions']}"
+            f" | {min(a['min_distance'], b['min_distance']):.4f}"
+            f" | {a['infeasible']} / {b['infeasible']} |"
+        )
+        print("learned", n, a["success_rate"], b["success_rate"], flush=True)
+    return [*lines, ""]
+
+
+def _seconds(stats: dict) -> str:
+    """Mean completion over the successful episodes, '-' where none succeeded."""
+    return f"{stats['completion_time']:.1f}" if stats["success_rate"] > 0 else "-"
+
+
+def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
+    lines = [
+        "# Liveness: crowds that finish",
+        "",
+        "Written by `python benchmarks/liveness.py`" + (" --quick" if quick else "") + ". Ours:"
+        " `BatchedEnv` with the filter on and the scenario's scripted controller (R-ORCA,"
+        " `docs/liveness.md`); ORCA: pyrvo on the same starts and goals, the same preferred"
+        " velocity. dt = 0.05 s, R = 1 m, u_max = 2 m/s. Makespan: the step the last agent first"
+        " reached its goal (within 0.05 m); '-' where not every agent did within the cap.",
+        "",
+        "## Crowd",
+        "",
+        *crowd_table(rows),
         "",
         "![share of agents arrived against time](liveness.png)",
     ]
@@ -201,6 +307,20 @@ def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
             f" closest pair {r['closest']:.4f} m."
         )
     path.write_text("\n".join(lines) + "\n")
+
+
+def replace_section(path: Path, heading: str, section: list[str], before: str) -> None:
+    """Put ``section`` in place of the one under ``heading`` in ``path`` (or before the
+    heading ``before`` where it is not there yet)."""
+    text = path.read_text()
+    body = "\n".join(section) + "\n"
+    if heading in text:
+        start = text.index(heading)
+        nxt = text.find("\n## ", start + len(heading))
+        end = nxt + 1 if nxt >= 0 else len(text)
+    else:
+        start = end = text.index(before)
+    path.write_text(text[:start] + body + text[end:])
 
 
 def plot(rows: list, path: Path) -> None:
@@ -232,22 +352,51 @@ def plot(rows: list, path: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="N = 100, 2 seeds")
-    ap.add_argument("--big", action="store_true", help="add one crowd of 10,000")
+    ap.add_argument(
+        "--big",
+        action="store_true",
+        help="run the crowd of 10,000 alone, replacing its section in --out",
+    )
     ap.add_argument("--out", type=Path, default=RESULTS / "liveness.md")
-    ap.add_argument("--circular-only", action="store_true",
-                    help="rerun the circular swap alone, replacing its section in --out")
+    ap.add_argument(
+        "--circular-only",
+        action="store_true",
+        help="rerun the circular swap alone, replacing its section in --out",
+    )
+    ap.add_argument(
+        "--symmetric-only",
+        action="store_true",
+        help="rerun the crowds of 1,000 under the symmetric weighting alone, replacing their"
+        " section in --out",
+    )
+    ap.add_argument(
+        "--learned",
+        type=Path,
+        metavar="RUN",
+        help="evaluate the residual policy of a training run at 12, 100 and 1,000 agents alone,"
+        " replacing its section in --out",
+    )
     args = ap.parse_args(argv)
+    if args.learned:
+        section = learned(args.learned)
+        replace_section(args.out, LEARNED_HEADING, section, "## Circular swap")
+        return 0
+    if args.symmetric_only:
+        rows = crowds((1000,), range(10), 4000, weighting="symmetric")
+        replace_section(args.out, SYMMETRIC_HEADING, symmetric_section(rows), "## Circular swap")
+        return 0
     if args.circular_only:
-        text = args.out.read_text()
-        start, end = text.index("## Circular swap"), text.index("## Other runs")
-        section = "\n".join(circular_section(circular((6, 12, 24, 64), 6000)))
-        args.out.write_text(text[:start] + section + "\n\n" + text[end:])
+        section = circular_section(circular((6, 12, 24, 64), 6000))
+        replace_section(args.out, "## Circular swap", [*section, ""], "## Other runs")
+        return 0
+    if args.big:
+        rows = crowds((10_000,), range(1), BIG_CAP)
+        replace_section(args.out, BIG_HEADING, big_section(rows), "## Circular swap")
+        plot(rows, args.out.with_name("liveness_10000.png"))
         return 0
     seeds = range(2) if args.quick else range(10)
     sizes = (100,) if args.quick else (100, 1000)
     rows = crowds(sizes, seeds, 4000)
-    if args.big:
-        rows += crowds((10_000,), range(1), 6000)
     circ = circular((6, 12) if args.quick else (6, 12, 24, 64), 6000)
     extra = {
         "crowd N = 100, seed 0, move-to-goal (today's controller, kept by name)":

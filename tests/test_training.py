@@ -54,11 +54,23 @@ def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys
     assert evaluate.main([*args, "--gif", str(gif)]) == 0
     report = json.loads((run / "evaluation.json").read_text())
     assert report["policy"]["episodes"] == 6 and report["policy"]["collisions"] == 0
+    # an episode succeeds when every agent arrives: the share arrived is at least the success
+    for who in ("policy", "scripted"):
+        assert report[who]["success_rate"] <= report[who]["arrived"] <= 1.0
     assert report["scripted"]["collisions"] == 0
     assert report["policy"]["min_distance"] >= 1.0 * (1 - 1e-9)
     assert report["paired_completion_time"]["paired_seeds"] >= 1
     assert gif.stat().st_size > 0
     assert "paired: policy - scripted" in capsys.readouterr().out
+    # the same policy in a larger crowd than it was trained in (its observation is local)
+    bigger = tmp_path / "bigger.json"
+    args = [str(run / "model.zip"), "--episodes", "2", "--set", "env.num_agents=9"]
+    assert evaluate.main([*args, "--out", str(bigger)]) == 0
+    report = json.loads(bigger.read_text())
+    assert report["num_agents"] == 9 and report["policy"]["collisions"] == 0
+    with pytest.raises(SystemExit) as exit_:
+        evaluate.main([str(run / "model.zip"), "--set", "env.num_agents=abc"])
+    assert exit_.value.code == 2 and "abc" in capsys.readouterr().err
 
 
 def test_time_limit_stops_training_and_saves(tmp_path, capsys):

@@ -2,6 +2,11 @@
 
     python -m training.evaluate runs/circular/model.zip --episodes 100 --seed 1000 \\
         --compare-scripted --gif runs/circular/episode.gif
+    python -m training.evaluate runs/crowd/best_model.zip --set env.num_agents=100
+
+``--set`` overrides the saved config for the evaluation alone (as ``training.train --set``
+does for training): the observation is local, so a policy trained on 12 agents runs unchanged
+in a crowd of 100 or 1,000.
 
 Prints and saves (``evaluation.json`` beside the model, or ``--out``) the success rate, mean
 completion time, collisions, infeasible steps and mean intervention. ``--compare-scripted`` runs
@@ -14,12 +19,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from rsvo_env.cli.arguments import count, output_problem
 from rsvo_env.cli.main import Parser
 from training import config as configs
+from training.config import make_env
 from training.evaluation import (
     evaluation_cap,
     model_policy,
@@ -31,16 +38,20 @@ from training.evaluation import (
 )
 
 
-def load_model(path: str | Path) -> tuple[Any, dict[str, Any]]:
+def load_model(path: str | Path, overrides: Sequence[str] = ()) -> tuple[Any, dict[str, Any]]:
     """The policy of a trained model and the resolved config saved beside it (``config.yaml``
-    in its run directory, or in the directory above for a checkpoint). ``path``: an SB3
-    ``.zip``, or an RLlib checkpoint directory written by ``--engine rllib``."""
+    in its run directory, or in the directory above for a checkpoint), with ``overrides``
+    (``KEY=VALUE``, as ``--set``) applied. ``path``: an SB3 ``.zip``, or an RLlib checkpoint
+    directory written by ``--engine rllib``."""
     path = Path(path)
     if not path.exists():
         raise ValueError(f"model {str(path)!r} does not exist")
     for folder in (path.parent, path.parent.parent):
         if (folder / "config.yaml").exists():
-            cfg = configs.resolve(configs.load(path=folder / "config.yaml"))
+            cfg = configs.load(path=folder / "config.yaml")
+            for assignment in overrides:
+                configs.set_value(cfg, assignment)
+            cfg = configs.resolve(cfg)
             break
     else:
         raise ValueError(f"no config.yaml beside {str(path)!r}: was it written by training.train?")
@@ -96,6 +107,7 @@ def evaluate_loaded(
         "seed": seed,
         "weighting": weighting or cfg["weighting"],
         "max_steps": evaluation_cap(cfg),
+        "num_agents": make_env(cfg, num_envs=1).num_agents,
         "policy": summarize(learned),
     }
     if compare_scripted:
@@ -120,6 +132,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--weighting", choices=configs.WEIGHTINGS, help="default: the config's")
     p.add_argument("--gif", help="write the first episode as a GIF here")
     p.add_argument("--out", help="the JSON report (default: evaluation.json beside the model)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override an entry of the saved config, e.g. --set env.num_agents=100",
+    )
     args = p.parse_args(argv)
     out = Path(args.out) if args.out else Path(args.model).parent / "evaluation.json"
     # the user's mistakes, found before any episode runs; what fails after is a bug
@@ -127,7 +146,7 @@ def main(argv: list[str] | None = None) -> int:
     if problem:
         p.exit(2, f"{p.prog}: error: {problem}\n")
     try:
-        policy, cfg = load_model(args.model)
+        policy, cfg = load_model(args.model, args.set)
     except ValueError as err:
         p.exit(2, f"{p.prog}: error: {err}\n")
     result = evaluate_loaded(

@@ -21,7 +21,7 @@ Policy = Callable[[NDArray[np.float32], Any], NDArray]
 # the per-episode records an evaluation returns, one array of length `episodes` each
 FIELDS = (
     "success", "completion_time", "collision_steps", "min_distance", "infeasible",
-    "return", "intervention", "intervention_rate", "steps",
+    "return", "intervention", "intervention_rate", "steps", "arrived",
 )  # fmt: skip
 
 
@@ -108,6 +108,7 @@ def run_episodes(
             out["intervention"][ended] = effort[ended].sum(axis=1) / (steps * N)
             out["intervention_rate"][ended] = touched[ended].sum(axis=1) / (steps * N)
             out["steps"][ended] = steps
+            out["arrived"][ended] = info["episode_arrived"][ended] / N
             finished |= ended
     out["safety_radius"] = np.full(E, env.scenario.params["safety_radius"])
     return out
@@ -119,6 +120,8 @@ def summarize(records: dict[str, NDArray]) -> dict[str, float]:
     return {
         "episodes": int(len(ok)),
         "success_rate": float(ok.mean()),
+        # the share of agents that reached their goals, over all episodes
+        "arrived": float(records["arrived"].mean()),
         "completion_time": float(np.nanmean(records["completion_time"])) if ok.any() else np.nan,
         "collisions": int(records["collision_steps"].sum()),
         "min_distance": float(records["min_distance"].min()),
