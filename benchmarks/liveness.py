@@ -24,6 +24,20 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from liveness_report import (  # a sibling module: benchmarks/ is the script's own path
+    BIG_CAP,
+    BIG_HEADING,
+    DT,
+    LEARNED_HEADING,
+    SYMMETRIC_HEADING,
+    big_section,
+    circular_section,
+    plot,
+    replace_section,
+    seconds_cell,
+    symmetric_section,
+    write,
+)
 
 from rsvo_env.neighbors import nearest_distance
 from rsvo_env.nominal import move_to_goal
@@ -31,12 +45,7 @@ from rsvo_env.vector import BatchedEnv
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
-DT = 0.05
 GAMMA = 20.0  # gamma dt = 1, as the training configs run the crowd
-BIG_HEADING = "## Crowd of 10,000"
-BIG_CAP = 6000
-SYMMETRIC_HEADING = "## Crowd of 1,000, symmetric weighting"
-LEARNED_HEADING = "## The learned residual at scale"
 
 
 def ours(n: int, seed: int, cap: int, scenario: str = "crowd", **kw) -> dict:
@@ -123,122 +132,6 @@ def circular(sizes, cap) -> list[dict]:
     return rows
 
 
-def circular_section(circ: list) -> list[str]:
-    lines = [
-        "## Circular swap (alternating theta 2, 1, 2, 1, ...; dt = 0.01)",
-        "",
-        "For the 6-agent game the paper's controller (move-to-goal with the right-hand rule,"
-        " `rsvo reproduce`) completes in 610 (symmetric) and 489 (asymmetric) steps; the paper"
-        " reports 620 and 415. Egoists first: the mean arrival step of the egoists (theta 1)"
-        " against the altruists (theta 2).",
-        "",
-        "| N | makespan, asymmetric | makespan, symmetric | egoists / altruists, asymmetric |"
-        " egoists / altruists, symmetric | closest pair [m] |",
-        "|---|---|---|---|---|---|",
-    ]
-    for c in circ:
-        a, s = c["asymmetric"], c["symmetric"]
-        lines.append(
-            f"| {c['n']} | {a['makespan'] or '-'} | {s['makespan'] or '-'} | "
-            f"{c['asymmetric_ego']:.0f} / {c['asymmetric_alt']:.0f} | "
-            f"{c['symmetric_ego']:.0f} / {c['symmetric_alt']:.0f} | "
-            f"{min(a['closest'], s['closest']):.4f} |"
-        )
-    return lines
-
-
-def crowd_table(rows: list) -> list[str]:
-    """The crowd table and the per-seed makespans of ``rows`` (any sizes)."""
-    lines = [
-        "| N | seeds | ours: arrived (mean, worst) | ours: makespan (mean, worst) |"
-        " ORCA: arrived (mean, worst) |"
-        " ORCA: makespan (mean, worst) | makespan ours / ORCA (ratio of the means, worst seed;"
-        " seeds where both finished) | closest pair, ours / ORCA [m] |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for n in sorted({r["n"] for r in rows}):
-        rs = [r for r in rows if r["n"] == n]
-        a = np.array([r["ours"]["arrived"][-1] for r in rs])
-        b = np.array([r["orca"]["arrived"][-1] for r in rs])
-        ma = [r["ours"]["makespan"] for r in rs]
-        mb = [r["orca"]["makespan"] for r in rs]
-        both = [(x, y) for x, y in zip(ma, mb, strict=True) if x and y]
-        ratio = (np.mean([x for x, _ in both]) / np.mean([y for _, y in both])) if both else None
-        worst = max((x / y for x, y in both), default=None)
-
-        def fmt(m):
-            ok = [x for x in m if x is not None]
-            if not ok:
-                return "- (none finished)"
-            note = "" if len(ok) == len(m) else f" ({len(ok)} of {len(m)} finished)"
-            return f"{np.mean(ok):.0f}, {max(ok)}{note}"
-
-        lines.append(
-            f"| {n:,} | {len(rs)} | {100 * a.mean():.2f} %, {100 * a.min():.1f} % | {fmt(ma)} | "
-            f"{100 * b.mean():.2f} %, {100 * b.min():.1f} % | {fmt(mb)} | "
-            + (f"{ratio:.2f}, {worst:.2f} ({len(both)} seeds)" if both else "-")
-            + f" | {min(r['ours']['closest'] for r in rs):.4f} / "
-            f"{min(r['orca']['closest'] for r in rs):.4f} |"
-        )
-    lines += ["", "Per seed, makespan ours / ORCA ('-': not every agent arrived by the cap):", ""]
-    for n in sorted({r["n"] for r in rows}):
-        cells = [f"{r['ours']['makespan'] or '-'} / {r['orca']['makespan'] or '-'}"
-                 for r in rows if r["n"] == n]  # fmt: skip
-        lines.append(f"- N = {n:,}: " + ", ".join(cells))
-    return lines
-
-
-def share_at(rows: list, seconds: tuple[float, ...]) -> list[str]:
-    """The share of agents arrived at given times, ours and ORCA's, one line a run."""
-    lines = ["| N | seed | " + " | ".join(f"{t:.0f} s, ours / ORCA" for t in seconds) + " |",
-             "|---|---|" + "---|" * len(seconds)]  # fmt: skip
-    for r in rows:
-        cells = []
-        for t in seconds:
-            k = int(round(t / DT)) - 1
-            a, b = (r[key]["arrived"] for key in ("ours", "orca"))
-            cells.append(
-                f"{100 * a[min(k, len(a) - 1)]:.1f} % / {100 * b[min(k, len(b) - 1)]:.1f} %"
-            )
-        lines.append(f"| {r['n']:,} | {r['seed']} | " + " | ".join(cells) + " |")
-    return lines
-
-
-def big_section(rows: list) -> list[str]:
-    return [
-        BIG_HEADING,
-        "",
-        f"Written by `python benchmarks/liveness.py --big` (one seed, cap {BIG_CAP} steps);"
-        " the same setting as above.",
-        "",
-        *crowd_table(rows),
-        "",
-        "Share of agents at their goals against time:",
-        "",
-        *share_at(rows, (25.0, 50.0, 75.0, 100.0, 150.0, BIG_CAP * DT)),
-        "",
-        "![share of agents arrived against time, N = 10,000](liveness_10000.png)",
-        "",
-    ]
-
-
-def symmetric_section(rows: list) -> list[str]:
-    return [
-        SYMMETRIC_HEADING,
-        "",
-        "Written by `python benchmarks/liveness.py --symmetric-only`: the crowds of 1,000 above"
-        " (the same seeds, starts, goals and theta draws) under the symmetric weighting, omega ="
-        " 1/2 for every pair in the filter and in R-ORCA (ORCA's own split). What the"
-        " responsibility weighting costs in a dense crowd: an agent's filter row lets it close"
-        " on a neighbour at most omega gamma h / (2 |d|) (its own share of the pair's slack,"
-        " whatever the neighbour does), so an altruist with omega = 0.02 (theta 10 against 1)"
-        " follows an egoist at full speed only from about 10 m behind (`docs/liveness.md`).",
-        "",
-        *crowd_table(rows),
-        "",
-    ]
-
-
 def learned(run: Path) -> list[str]:
     """The learned residual of ``run`` (trained on the crowd with R-ORCA under it) evaluated at
     the size it was trained at and in crowds of 100 and 1,000, beside the scripted controller on
@@ -269,84 +162,13 @@ def learned(run: Path) -> list[str]:
         lines.append(
             f"| {n:,} | {episodes} | {cap * cfg['env']['dt']:.0f} | {100 * a['success_rate']:.0f} %"
             f" / {100 * b['success_rate']:.0f} % | {100 * a['arrived']:.1f} % /"
-            f" {100 * b['arrived']:.1f} % | {_seconds(a)} / {_seconds(b)}"
+            f" {100 * b['arrived']:.1f} % | {seconds_cell(a)} / {seconds_cell(b)}"
             f" | {a['collisions']} / {b['collisions']}"
             f" | {min(a['min_distance'], b['min_distance']):.4f}"
             f" | {a['infeasible']} / {b['infeasible']} |"
         )
         print("learned", n, a["success_rate"], b["success_rate"], flush=True)
     return [*lines, ""]
-
-
-def _seconds(stats: dict) -> str:
-    """Mean completion over the successful episodes, '-' where none succeeded."""
-    return f"{stats['completion_time']:.1f}" if stats["success_rate"] > 0 else "-"
-
-
-def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
-    lines = [
-        "# Liveness: crowds that finish",
-        "",
-        "Written by `python benchmarks/liveness.py`" + (" --quick" if quick else "") + ". Ours:"
-        " `BatchedEnv` with the filter on and the scenario's scripted controller (R-ORCA,"
-        " `docs/liveness.md`); ORCA: pyrvo on the same starts and goals, the same preferred"
-        " velocity. dt = 0.05 s, R = 1 m, u_max = 2 m/s. Makespan: the step the last agent first"
-        " reached its goal (within 0.05 m); '-' where not every agent did within the cap.",
-        "",
-        "## Crowd",
-        "",
-        *crowd_table(rows),
-        "",
-        "![share of agents arrived against time](liveness.png)",
-    ]
-    lines += ["", *circular_section(circ)]
-    lines += ["", "## Other runs", ""]
-    for name, r in extra.items():
-        lines.append(
-            f"- {name}: arrived {100 * r['arrived'][-1]:.1f} %, makespan {r['makespan'] or '-'},"
-            f" closest pair {r['closest']:.4f} m."
-        )
-    path.write_text("\n".join(lines) + "\n")
-
-
-def replace_section(path: Path, heading: str, section: list[str], before: str) -> None:
-    """Put ``section`` in place of the one under ``heading`` in ``path`` (or before the
-    heading ``before`` where it is not there yet)."""
-    text = path.read_text()
-    body = "\n".join(section) + "\n"
-    if heading in text:
-        start = text.index(heading)
-        nxt = text.find("\n## ", start + len(heading))
-        end = nxt + 1 if nxt >= 0 else len(text)
-    else:
-        start = end = text.index(before)
-    path.write_text(text[:start] + body + text[end:])
-
-
-def plot(rows: list, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    sizes = sorted({r["n"] for r in rows})
-    fig, axes = plt.subplots(1, len(sizes), figsize=(4.2 * len(sizes), 3.6), squeeze=False)
-    for ax, n in zip(axes[0], sizes, strict=True):
-        for r in [r for r in rows if r["n"] == n]:
-            for key, color, label in (("ours", "tab:red", "ours (R-ORCA + filter)"),
-                                      ("orca", "tab:blue", "ORCA (pyrvo)")):  # fmt: skip
-                y = r[key]["arrived"]
-                t = DT * np.arange(1, len(y) + 1)
-                ax.plot(t, 100 * y, color=color, alpha=0.6, lw=1,
-                        label=label if r["seed"] == 0 else None)  # fmt: skip
-        ax.set_title(f"crowd, N = {n:,}")
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("agents that reached their goals [%]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8, loc="lower right")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> int:
