@@ -2,12 +2,14 @@
 
 import warnings
 
+import numba
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from instances import KINDS, make_batch, make_instance, stack
 
+from rsvo_env import threads
 from rsvo_env.solvers import exact, reference
 
 
@@ -103,9 +105,11 @@ def test_masked_rows_are_ignored():
 
 def test_parallel_batch_equals_serial():
     rng = np.random.default_rng(3)
-    instances = make_batch(rng, 2 * exact.PARALLEL_THRESHOLD + 10, 8)
+    instances = make_batch(rng, 2 * threads.PARALLEL_THRESHOLD + 10, 8)
     nominal, A, b, mask, lo, hi = stack(instances)
-    big = exact.solve_batch(nominal, A, b, mask, lo, hi)
+    with threads.using(numba.config.NUMBA_NUM_THREADS):
+        assert threads.parallel(len(instances)) == (numba.config.NUMBA_NUM_THREADS > 1)
+        big = exact.solve_batch(nominal, A, b, mask, lo, hi)
     small = [
         exact.solve_batch(*(x[i : i + 1] for x in (nominal, A, b, mask, lo, hi)))
         for i in range(0, len(instances), 97)

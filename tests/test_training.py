@@ -47,7 +47,10 @@ def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys
     import numba
     import torch
 
+    from rsvo_env import threads as kernels
+
     assert saved["threads"] == 1 == torch.get_num_threads() == numba.get_num_threads()
+    assert kernels.get_num_threads() == 1
 
     gif = tmp_path / "episode.gif"
     args = [str(run / "model.zip"), "--episodes", "6", "--seed", "5", "--compare-scripted"]

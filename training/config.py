@@ -190,8 +190,12 @@ def limit_threads(threads: int) -> None:
     import numba
     import torch
 
+    from rsvo_env import threads as kernels
+
     # numba first: starting its threading layer can reset the OpenMP thread count torch reads
-    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    n = min(threads, numba.config.NUMBA_NUM_THREADS)
+    numba.set_num_threads(n)
+    kernels.set_num_threads(n)  # the library's kernels: parallel only when given the threads
     torch.set_num_threads(threads)
 
 

@@ -63,7 +63,7 @@ def build(cfg: dict[str, Any], num_env_runners: int, num_envs_per_env_runner: in
     r = cfg["rllib"]
     one_thread = {
         key: str(cfg["threads"])
-        for key in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
+        for key in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS", "RSVO_NUM_THREADS")
     }
     return (
         PPOConfig()

@@ -12,8 +12,9 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from rsvo_env import threads
 from rsvo_env.barriers import single_integrator_row, support
-from rsvo_env.solvers.exact import PARALLEL_THRESHOLD, solve_rows
+from rsvo_env.solvers.exact import solve_rows
 
 
 @njit(cache=True, inline="always")
@@ -105,7 +106,7 @@ def filter_dense(
     outputs = _outputs(E, n)
     # the choice made here, not in compiled code: a parallel kernel called from another
     # compiled function runs many times slower
-    kernel = _parallel if E * n >= PARALLEL_THRESHOLD else _serial
+    kernel = _parallel if threads.parallel(E * n) else _serial
     kernel(
         np.asarray(positions, dtype=np.float64),
         np.asarray(nominal, dtype=np.float64),

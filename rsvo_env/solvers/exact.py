@@ -22,6 +22,8 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from rsvo_env import threads
+
 # Round-off allowances, relative to the problem's scale: a row whose offset is b (unit normal) is
 # satisfied to _EPS * (scale + |b|), with ``scale`` the box's extent, so a user in millimetres
 # gets the same answers as one in metres.
@@ -258,9 +260,6 @@ def _solve_csr_parallel(nominal, A, b, offsets, lo, hi, out, feasible, active, v
             )
 
 
-PARALLEL_THRESHOLD = 256
-
-
 def solve_csr(
     nominal: NDArray[np.float64],
     A: NDArray[np.float64],
@@ -273,7 +272,7 @@ def solve_csr(
     rows ``A[offsets[i]:offsets[i + 1]]`` (R, 2), ``b`` (R,); the scratch space is the widest
     agent's, once per thread, so memory follows the rows, not n times the widest."""
     nominal, lo, hi, outputs = _batch(nominal, lo, hi)
-    kernel = _solve_csr_parallel if len(nominal) >= PARALLEL_THRESHOLD else _solve_csr_serial
+    kernel = _solve_csr_parallel if threads.parallel(len(nominal)) else _solve_csr_serial
     kernel(
         nominal, np.ascontiguousarray(A, dtype=np.float64).reshape(-1, 2),
         np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.int64),
@@ -316,6 +315,6 @@ def solve_batch(
         A = np.zeros((n, 1, 2))
         b = np.zeros((n, 1))
         mask = np.zeros((n, 1), dtype=np.bool_)
-    kernel = _solve_parallel if n >= PARALLEL_THRESHOLD else _solve_serial
+    kernel = _solve_parallel if threads.parallel(n) else _solve_serial
     kernel(nominal, A, b, mask, lo, hi, *outputs)
     return outputs
