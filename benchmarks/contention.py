@@ -81,37 +81,31 @@ def settings() -> dict[str, dict[str, str]]:
 
 
 def kernel_threshold(sizes=(64, 128, 256, 512, 1024, 4096), repeats: int = 200) -> list[tuple]:
-    """Microseconds of one solve of n QPs (8 rows each), serial and with the pool."""
-    from rsvo_env import threads
-
-    rng = np.random.default_rng(0)
-    rows = []
-    keep, threads.PARALLEL_THRESHOLD = threads.PARALLEL_THRESHOLD, 0  # the pool at every n
-    try:
-        return _kernel_rows(sizes, repeats, rng, rows)
-    finally:
-        threads.PARALLEL_THRESHOLD = keep
-
-
-def _kernel_rows(sizes, repeats, rng, rows) -> list[tuple]:
+    """Microseconds of one solve of n QPs (8 rows each), serial and with the pool (forced at
+    every n: the threshold lowered to 0 for the measurement)."""
     from rsvo_env import threads
     from rsvo_env.solvers import exact
 
-    for n in sizes:
-        nominal = rng.normal(size=(n, 2))
-        A = rng.normal(size=(n * 8, 2))
-        b = rng.uniform(0.1, 1.0, n * 8)
-        offsets = np.arange(0, 8 * n + 1, 8, dtype=np.int64)
-        box = np.array([2.0, 2.0])
-        times = {}
-        for k in (1, CORES, 1, CORES):  # alternating, the second of each kept
-            with threads.using(k):
-                exact.solve_csr(nominal, A, b, offsets, -box, box)
-                t = time.perf_counter()
-                for _ in range(repeats):
-                    exact.solve_csr(nominal, A, b, offsets, -box, box)
-                times[k] = 1e6 * (time.perf_counter() - t) / repeats
-        rows.append((n, times[1], times[CORES]))
+    rng = np.random.default_rng(0)
+    box = np.array([2.0, 2.0])
+    rows = []
+    keep, threads.PARALLEL_THRESHOLD = threads.PARALLEL_THRESHOLD, 0
+    try:
+        for n in sizes:
+            qps = (rng.normal(size=(n, 2)), rng.normal(size=(n * 8, 2)),
+                   rng.uniform(0.1, 1.0, n * 8), np.arange(0, 8 * n + 1, 8, dtype=np.int64),
+                   -box, box)  # fmt: skip
+            times = {}
+            for k in (1, CORES, 1, CORES):  # alternating, the second of each kept
+                with threads.using(k):
+                    exact.solve_csr(*qps)
+                    t = time.perf_counter()
+                    for _ in range(repeats):
+                        exact.solve_csr(*qps)
+                    times[k] = 1e6 * (time.perf_counter() - t) / repeats
+            rows.append((n, times[1], times[CORES]))
+    finally:
+        threads.PARALLEL_THRESHOLD = keep
     return rows
 
 
