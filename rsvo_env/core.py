@@ -21,10 +21,10 @@ import numpy as np
 from gymnasium.utils import seeding
 from numpy.typing import NDArray
 
-from rsvo_env import observation, obstacle_observation, planar, post_step
+from rsvo_env import observation, obstacle_observation, planar, post_step, signals
 from rsvo_env.bodies import Bodies
 from rsvo_env.filter_result import FilterResult, merge_stats
-from rsvo_env.metrics import COLLISION_TOL, EpisodeMetrics, collided
+from rsvo_env.metrics import EpisodeMetrics
 from rsvo_env.neighbors import DENSE_MAX_AGENTS
 from rsvo_env.pairs import Floor
 from rsvo_env.reset_options import check_options
@@ -35,6 +35,7 @@ from rsvo_env.scenarios import Scenario
 from rsvo_env.scene_checks import check_scene, check_scene_filter
 from rsvo_env.stall import StallClock, deadlock_steps, goal_distance
 from rsvo_env.state import State
+from rsvo_env.theta_action import theta_action_of
 from rsvo_env.validation import check_count, check_real
 from rsvo_env.weights import Weights
 
@@ -46,7 +47,8 @@ class Simulator:
     weigh the reward terms (``reward_team``: the share of each agent's reward replaced by its
     env's mean); ``stall_clock``: observe each agent's :class:`rsvo_env.stall.StallClock`, in
     units of that many steps (None: not observed); ``record_series`` (E = 1) keeps the series
-    the paper plots."""
+    the paper plots; ``theta_action``: each action gets a third component, the agent's theta for
+    the step, on ``theta_action_range`` (:mod:`rsvo_env.theta_action`)."""
 
     def __init__(
         self,
@@ -61,6 +63,8 @@ class Simulator:
         reward_team: float = 0.0,
         stall_clock: int | None = None,
         record_series: bool = False,
+        theta_action: bool = False,
+        theta_action_range: Any = None,
     ) -> None:
         n = scenario.num_agents
         check_count(num_envs, "num_envs", 1)
@@ -92,6 +96,8 @@ class Simulator:
         p = scenario.params
         self.dt, self.max_steps, self.u_max = float(p["dt"]), int(p["max_steps"]), scenario.u_max
         self.safety_radius = float(p["safety_radius"])
+        self.theta_action = theta_action_of(theta_action, theta_action_range, p["theta_max"])
+        self.action_width = 2 if self.theta_action is None else 3
         self.world_params = {
             "safety_radius": self.safety_radius,
             "u_max": self.u_max,
@@ -137,7 +143,7 @@ class Simulator:
             low, high = np.r_[low, lo_o].astype(np.float32), np.r_[high, hi_o].astype(np.float32)
         return (
             gymnasium.spaces.Box(low, high, dtype=np.float32),
-            gymnasium.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32),
+            gymnasium.spaces.Box(-1.0, 1.0, (self.action_width,), dtype=np.float32),
         )
 
     def add_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
@@ -253,6 +259,14 @@ class Simulator:
         """The scripted controller's physical controls (E, N, 2) for the current state."""
         return self.scenario.nominal(self.state)
 
+    def nominal_actions(self) -> NDArray[np.float64]:
+        """The scripted controller's actions (E, N, A); with theta actions, the last component
+        keeps each agent's theta (clipped to the range)."""
+        a = self.to_actions(self.nominal_controls())
+        if self.theta_action is None:
+            return a
+        return np.concatenate([a, self.theta_action.action(self.state.theta)[..., None]], -1)
+
     # ---- the step ---------------------------------------------------------------------------
     def _floor(self) -> Floor | None:
         """The weights' floor for the large-N pair search (:meth:`Weights.floor`)."""
@@ -310,12 +324,17 @@ class Simulator:
         return u, stats, intervention
 
     def step(self, actions: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray, NDArray, dict]:
-        """One step of every env on validated normalised actions (E, N, 2).
+        """One step of every env on validated normalised actions (E, N, A): A = 2, or 3 with
+        theta actions (the scores of this step, and of its weights, come first).
 
         Returns observations (E, N, D) float32, rewards (E, N), terminated and truncated (E,),
         and the per-agent signals (E, N, ...) of :meth:`signals`.
         """
         s, sc = self.state, self.scenario
+        if self.theta_action is not None:
+            s.theta[:] = self.theta_action.theta(actions[..., 2])
+            self.weights.update_all(s.theta, s.weighting)
+            actions = actions[..., :2]
         u_nominal = self.to_controls(actions)
         u, stats, intervention = self.apply_filters(u_nominal)
         before = s.positions
@@ -337,43 +356,9 @@ class Simulator:
         signals = self.signals(u_nominal, u, intervention, stats)
         return self.observe(), reward, terminated, truncated, signals
 
-    def signals(
-        self,
-        u_nominal: NDArray | None = None,
-        u_safe: NDArray | None = None,
-        intervention: NDArray | None = None,
-        stats: dict | None = None,
-    ) -> dict[str, NDArray]:
-        """Per-agent signals (E, N, ...), the same keys, dtypes and shapes at reset (controls
-        zero, no filter work) and at every step."""
-        s = self.state
-        E, n = s.theta.shape
-        if u_nominal is None or u_safe is None or intervention is None:
-            u_nominal = u_safe = np.zeros((E, n, 2))
-            intervention = np.zeros((E, n))
-        if stats is None:  # no filter work: feasible, nothing active, no violation
-            stats = {
-                "feasible": np.ones((E, n), dtype=bool),
-                "active": np.zeros((E, n), dtype=np.int64),
-                "max_violation": np.zeros((E, n)),
-            }
-        return {
-            "u_nominal": u_nominal,
-            "u_safe": u_safe,
-            "intervention": intervention,
-            "feasible": stats["feasible"],
-            "active_constraints": stats["active"],
-            "max_violation": stats["max_violation"],
-            "min_distance": s.nearest,
-            "cost": (
-                collided(s.nearest, self.safety_radius)
-                if s.contact is None
-                else s.contact < 1.0 - COLLISION_TOL
-            ).astype(np.float64),
-            "at_goal": s.at_goal,
-            "rh_active": s.rh_active,
-            "deadlocked": self.progress.stalled(self.deadlock_window, s.at_goal),
-        }
+    def signals(self, *args: Any) -> dict[str, NDArray]:
+        """Per-agent signals (E, N, ...) (:func:`rsvo_env.signals.signals`)."""
+        return signals.signals(self, *args)
 
     def observe(self, envs: NDArray[np.int64] | None = None) -> NDArray[np.float32]:
         """Observations (E, N, D) of all envs, or of the given ones."""

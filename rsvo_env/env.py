@@ -186,7 +186,7 @@ class RSVOParallelEnv(ParallelEnv):
 
     def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
         self._require_running()
-        a = check_action_dict(actions, self.agents)
+        a = check_action_dict(actions, self.agents, (self.sim.action_width,))
         obs, reward, terminated, truncated, signals = self.sim.step(a[None])
         self.history.append(self.sim.state.positions[0].copy())
         agents = self.agents
@@ -231,7 +231,7 @@ class RSVOParallelEnv(ParallelEnv):
         """The scripted move-to-goal (+ right-hand rule, or lane following) as env actions."""
         if not self._started:
             raise RuntimeError("call reset() first")
-        a = self.sim.to_actions(self.sim.nominal_controls())[0].astype(np.float32)
+        a = self.sim.nominal_actions()[0].astype(np.float32)
         return dict(zip(self.possible_agents, a, strict=True))
 
     def action_to_control(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -308,7 +308,7 @@ class CheckedActionsAEC(BaseWrapper):
     def step(self, action: Any) -> None:
         agent = self.agent_selection
         if action is not None and not (self.terminations[agent] or self.truncations[agent]):
-            check_action(action, agent)
+            check_action(action, agent, self.action_space(agent).shape)
         super().step(action)
 
 

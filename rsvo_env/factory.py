@@ -18,6 +18,8 @@ SIM_KEYWORDS = (
     "reward_goal",
     "stall_clock",
     "reward_team",
+    "theta_action",
+    "theta_action_range",
 )
 # The filter's keywords: every adapter takes them out of its keywords by this one table and hands
 # them to the filter (FilterConfig is their owner; the scenario's gamma, barrier and split are the

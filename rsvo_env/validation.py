@@ -68,15 +68,21 @@ def check_vectors(
     n: int | None = None,
     names: Sequence[str] | None = None,
     lead: tuple[int, ...] | None = (),
+    width: int = 2,
 ) -> NDArray[np.float64]:
     """An array of finite planar vectors (positions, velocities, actions), shape
-    ``lead + (N, 2)``: (N, 2) by default, (E, N, 2) with ``lead=(E,)``, either with
+    ``lead + (N, width)``: (N, 2) by default, (E, N, 2) with ``lead=(E,)``, either with
     ``lead=None``. The error names the env (when batched), the agent and the value."""
     arr = real_array(values, name)
     ok_lead = arr.ndim in (2, 3) if lead is None else arr.shape[:-2] == lead
-    if arr.ndim < 2 or not ok_lead or arr.shape[-1] != 2 or (n is not None and arr.shape[-2] != n):
+    if (
+        arr.ndim < 2
+        or not ok_lead
+        or arr.shape[-1] != width
+        or (n is not None and arr.shape[-2] != n)
+    ):
         rows = "N" if n is None else str(n)
-        want = f"({', '.join([*map(str, lead or ()), rows])}, 2)"
+        want = f"({', '.join([*map(str, lead or ()), rows])}, {width})"
         raise ValueError(f"{name} has shape {arr.shape}, expected {want}")
     bad = ~np.isfinite(arr).all(axis=-1)
     if bad.any():

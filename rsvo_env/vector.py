@@ -7,6 +7,7 @@ an ``RSVOParallelEnv`` reset with seed ``s + e`` (and reset without a seed after
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium
@@ -35,7 +36,9 @@ class BatchedEnv:
     ``reset(seed, options) -> (obs (E, N, D) float32, info)``;
     ``step(actions (E, N, 2)) -> (obs, reward (E, N), terminated (E,), truncated (E,), info)``.
     Actions are normalised as in the ParallelEnv (norm clipped to 1, scaled by the speed
-    limit). ``info`` is a dict of arrays, the same keys at every step:
+    limit); with ``theta_action=True`` they are (E, N, 3), the last component each agent's
+    theta for the step (:mod:`rsvo_env.theta_action`). ``info`` is a dict of arrays, the same
+    keys at every step (with theta actions, ``theta`` (E, N) too):
 
     * every per-agent signal, (E, N, ...): ``u_nominal``, ``u_safe``, ``intervention``,
       ``feasible``, ``active_constraints``, ``max_violation``, ``min_distance``, ``cost``,
@@ -111,7 +114,8 @@ class BatchedEnv:
             np.broadcast_to(high, (E, N, len(high))),
             dtype=np.float32,
         )
-        self.action_space = gymnasium.spaces.Box(-1.0, 1.0, (E, N, 2), dtype=np.float32)
+        A = self.sim.action_width
+        self.action_space = gymnasium.spaces.Box(-1.0, 1.0, (E, N, A), dtype=np.float32)
         self.single_state_space = global_state.space(self.sim)
         S = self.single_state_space
         self.state_space = gymnasium.spaces.Box(
@@ -124,16 +128,20 @@ class BatchedEnv:
         self._pending = np.zeros(E, dtype=bool)
 
     def reset(
-        self, seed: int | None = None, options: dict[str, Any] | None = None
+        self,
+        seed: int | Sequence[int | None] | None = None,
+        options: dict[str, Any] | None = None,
     ) -> tuple[NDArray[np.float32], dict[str, NDArray]]:
-        """Reset every env; env e is seeded with ``seed + e`` (all unseeded: seed None)."""
-        seed = check_seed(seed)
+        """Reset every env; env e is seeded with ``seed + e`` (all unseeded: seed None), or, as
+        Gymnasium's vector envs take it, with ``seed[e]`` of a list of one seed (or None) an env."""
+        if isinstance(seed, (list, tuple)):
+            if len(seed) != self.num_envs:
+                raise ValueError(f"seed has {len(seed)} entries, expected {self.num_envs}")
+            seeds = [check_seed(s, f"seed[{e}]") for e, s in enumerate(seed)]
+        else:
+            first = check_seed(seed)
+            seeds = [None if first is None else first + e for e in range(self.num_envs)]
         theta, weighting = self.sim.check_options(options)
-        seeds = (
-            [None] * self.num_envs
-            if seed is None
-            else [int(seed) + e for e in range(self.num_envs)]
-        )
         self.sim.reset(range(self.num_envs), seeds, theta, weighting)
         self._reset_args = (theta, weighting)
         self._pending[:] = False
@@ -145,7 +153,9 @@ class BatchedEnv:
     ) -> tuple[NDArray[np.float32], NDArray, NDArray[np.bool_], NDArray[np.bool_], dict]:
         if self._reset_args is None:
             raise RuntimeError("call reset() before step()")
-        a = check_vectors(actions, "actions", self.num_agents, lead=(self.num_envs,))
+        a = check_vectors(
+            actions, "actions", self.num_agents, lead=(self.num_envs,), width=self.sim.action_width
+        )
         obs, reward, terminated, truncated, signals = self.sim.step(a)
         if self.autoreset_mode == "next_step":
             return self._next_step(obs, reward, terminated, truncated, signals)
@@ -197,8 +207,9 @@ class BatchedEnv:
         return global_state.values(self.sim)
 
     def nominal_actions(self) -> NDArray[np.float32]:
-        """The scripted controller's normalised actions (E, N, 2) for the current state."""
-        return self.sim.to_actions(self.sim.nominal_controls()).astype(np.float32)
+        """The scripted controller's normalised actions (E, N, A) for the current state (with
+        theta actions, the component that keeps each agent's theta)."""
+        return self.sim.nominal_actions().astype(np.float32)
 
     def set_weighting(self, mode: Weighting) -> None:
         """Weighting of the running and all later episodes."""

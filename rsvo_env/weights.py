@@ -66,6 +66,15 @@ class Weights:
             self.omega_min[idx] = [min_pair_weight(theta[e], mode) for e in idx]
         self.version += 1
 
+    def update_all(self, theta: NDArray, modes: Sequence[Weighting]) -> None:
+        """Every env has new scores (theta actions): one :meth:`update` per weighting in use."""
+        groups: dict[object, list[int]] = {}
+        for e, m in enumerate(modes):
+            # modes are strings or callables: equal strings group, a callable by identity
+            groups.setdefault(m if isinstance(m, str) else id(m), []).append(e)
+        for envs in groups.values():
+            self.update(envs, theta, modes)
+
     def env_matrix(self, e: int, theta: NDArray, mode: Weighting) -> NDArray[np.float64]:
         """Env e's (N, N) matrix: the kept one, or computed now from its scores."""
         return self.matrix[e] if self.matrix is not None else weight_matrix(theta, mode)

@@ -44,6 +44,8 @@ def test_large_crowd_batch_equals_single_envs_bit_for_bit():
 
 
 def check_batch_equals_singles(name, filtered, kwargs, steps):
+    """Env e of a batch seeded s against a single env seeded s + e, random actions of the
+    batch's width (theta actions too), every signal, reward, end and final observation."""
     E, seed = 3, 11
     venv = BatchedEnv(name, num_envs=E, safety_filter=filtered, **kwargs)
     singles = [rsvo_env.parallel_env(name, **kwargs) for _ in range(E)]
@@ -59,14 +61,15 @@ def check_batch_equals_singles(name, filtered, kwargs, steps):
     rng = np.random.default_rng(0)
     ends = 0
     for t in range(steps):
-        actions = rng.uniform(-1.2, 1.2, (E, len(agents), 2)).astype(np.float32)
+        width = venv.single_action_space.shape[0]
+        actions = rng.uniform(-1.2, 1.2, (E, len(agents), width)).astype(np.float32)
         obs, reward, term, trunc, info = venv.step(actions)
         for e, env in enumerate(singles):
             o, r, te, tr, inf = env.step({a: actions[e, i] for i, a in enumerate(agents)})
             where = (name, t, e)
             assert np.array_equal(reward[e], [r[a] for a in agents]), where
             assert term[e] == te[agents[0]] and trunc[e] == tr[agents[0]], where
-            for key in SIGNALS:
+            for key in (*SIGNALS, "theta") if "theta" in info else SIGNALS:
                 assert np.array_equal(info[key][e], [inf[a][key] for a in agents]), (key, where)
             for key in inf[agents[0]]:
                 if key.startswith("episode_"):
@@ -200,3 +203,20 @@ def test_the_fused_after_step_equals_the_hooks_bit_for_bit(name, kwargs):
     assert ended > 0  # episodes reached their goals and auto-reset along the way
     for a, b in zip(*runs, strict=True):
         assert np.array_equal(a, b)
+
+
+def test_a_list_of_seeds_seeds_each_env():
+    """Gymnasium's vector form: ``seed[e]`` for env e; the same episode as an int seed gives
+    the env of that index; a bad list is refused by name and changes nothing."""
+    env = BatchedEnv("crowd", num_envs=3, num_agents=5)
+    obs_list, _ = env.reset(seed=[7, 3, None])
+    obs_int, _ = BatchedEnv("crowd", num_envs=1, num_agents=5).reset(seed=3)
+    assert np.array_equal(obs_list[1], obs_int[0])
+    obs_seven, _ = BatchedEnv("crowd", num_envs=2, num_agents=5).reset(seed=6)
+    assert np.array_equal(obs_list[0], obs_seven[1])
+    before = env.sim.state.positions.copy()
+    with pytest.raises(ValueError, match="2 entries, expected 3"):
+        env.reset(seed=[1, 2])
+    with pytest.raises(ValueError, match=r"seed\[1\] = -1"):
+        env.reset(seed=[1, -1, 2])
+    assert np.array_equal(env.sim.state.positions, before)

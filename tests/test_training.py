@@ -240,3 +240,20 @@ def test_a_named_activation_reaches_the_policy():
     model = PPO("MlpPolicy", venv, **hyper)
     layers = list(model.policy.mlp_extractor.policy_net)
     assert [type(m) for m in layers] == [torch.nn.Linear, torch.nn.ReLU] * 2
+
+
+def test_theta_actions_train_and_evaluate(tmp_path):
+    """``env.theta_action: true``: the policy also chooses every agent's theta each step, through
+    the same entry points; the report has no collision."""
+    run = tmp_path / "run"
+    args = [*SMALL, "--set", "env.theta_action=true", "--timesteps", "1500", "--out", str(run)]
+    assert train.main(args) == 0
+    saved = yaml.safe_load((run / "config.yaml").read_text())
+    assert saved["env"]["theta_action"] is True
+    args = [str(run / "model.zip"), "--episodes", "3", "--compare-scripted"]
+    assert evaluate.main(args) == 0
+    report = json.loads((run / "evaluation.json").read_text())
+    assert report["policy"]["collisions"] == 0 and report["policy"]["infeasible"] == 0
+    cfg = configs.resolve(saved)
+    env = configs.make_env(cfg, num_envs=2)
+    assert env.single_action_space.shape == (3,)

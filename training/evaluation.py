@@ -54,7 +54,7 @@ def model_policy(model: Any) -> Policy:
 
     def act(obs: NDArray[np.float32], env: Any) -> NDArray:
         flat = obs.reshape(-1, obs.shape[-1])
-        return model.predict(flat, deterministic=True)[0].reshape(*obs.shape[:-1], 2)
+        return model.predict(flat, deterministic=True)[0].reshape(*obs.shape[:-1], -1)
 
     return act
 

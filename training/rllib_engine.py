@@ -39,7 +39,9 @@ def module_policy(module: Any) -> Any:
         flat = torch.as_tensor(obs.reshape(-1, obs.shape[-1]), dtype=torch.float32)
         with torch.no_grad():
             out = module.forward_inference({"obs": flat})["action_dist_inputs"]
-        return out[:, :2].numpy().reshape(*obs.shape[:-1], 2)
+        # the Gaussian's inputs are the means, then the log-stds: as many of each as actions
+        width = out.shape[1] // 2
+        return out[:, :width].numpy().reshape(*obs.shape[:-1], width)
 
     return act
 

@@ -67,7 +67,7 @@ class GymnasiumVectorEnv(VectorEnv):
         if a.shape != self.action_space.shape:
             raise ValueError(f"actions has shape {a.shape}, expected {self.action_space.shape}")
         E, N = self.env.num_envs, self.agents_per_env
-        obs, reward, terminated, truncated, info = self.env.step(a.reshape(E, N, 2))
+        obs, reward, terminated, truncated, info = self.env.step(a.reshape(E, N, -1))
         return (
             self._flat(obs),
             reward.reshape(-1),

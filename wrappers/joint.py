@@ -19,7 +19,8 @@ from wrappers.safety_filter import filtered_parallel_env
 
 
 class JointControlEnv(gymnasium.Env):
-    """Action: ``Box(-1, 1, (2 N,))``, agent i's action at ``[2 i, 2 i + 2)``. Observation: the
+    """Action: ``Box(-1, 1, (A N,))``, agent i's action at ``[A i, A i + A)`` (A = 2, or 3 with
+    ``theta_action=True``). Observation: the
     agents' observations concatenated in ``possible_agents`` order. ``parallel`` is the
     (filtered) PettingZoo ParallelEnv it drives."""
 
@@ -46,7 +47,8 @@ class JointControlEnv(gymnasium.Env):
             np.concatenate([s.high for s in obs_spaces]),
             dtype=np.float32,
         )
-        self.action_space = gymnasium.spaces.Box(-1.0, 1.0, (2 * n,), dtype=np.float32)
+        self.width = base.action_space(self.agent_names[0]).shape[0]
+        self.action_space = gymnasium.spaces.Box(-1.0, 1.0, (self.width * n,), dtype=np.float32)
 
     def _flat(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         return np.concatenate([obs[a] for a in self.agent_names]).astype(np.float32)
@@ -78,9 +80,9 @@ class JointControlEnv(gymnasium.Env):
         if a.shape != self.action_space.shape:
             raise ValueError(
                 f"action has shape {a.shape}, expected {self.action_space.shape} "
-                f"(2 values for each of {len(self.agent_names)} agents)"
+                f"({self.width} values for each of {len(self.agent_names)} agents)"
             )
-        per_agent = a.reshape(-1, 2)
+        per_agent = a.reshape(-1, self.width)
         bad = ~np.isfinite(per_agent).all(axis=1)
         if bad.any():
             i = int(np.argmax(bad))

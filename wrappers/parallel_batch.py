@@ -38,8 +38,9 @@ class ParallelBatch:
 
     def step(self, actions: Any) -> tuple[NDArray, NDArray, NDArray, NDArray, dict]:
         a = np.asarray(actions)
-        if a.shape != (1, self.num_agents, 2):
-            raise ValueError(f"actions has shape {a.shape}, expected (1, {self.num_agents}, 2)")
+        want = (1, self.num_agents, *self.single_action_space.shape)
+        if a.shape != want:
+            raise ValueError(f"actions has shape {a.shape}, expected {want}")
         step = self.env.step(dict(zip(self.agents, a[0], strict=True)))
         obs, rewards, terms, truncs, infos = step
         first = self.agents[0]

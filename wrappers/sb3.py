@@ -58,7 +58,9 @@ class SB3VecEnv(VecEnv):
         return obs.reshape(self.num_envs, -1)
 
     def step_async(self, actions: NDArray) -> None:
-        self._actions = np.asarray(actions).reshape(self.venv.num_envs, self.agents_per_env, 2)
+        self._actions = np.asarray(actions).reshape(
+            self.venv.num_envs, self.agents_per_env, *self.action_space.shape
+        )
 
     def step_wait(self) -> tuple[NDArray, NDArray, NDArray, list[dict]]:
         obs, reward, terminated, truncated, info = self.venv.step(self._actions)
