@@ -195,3 +195,19 @@ def test_theta_search_refuses_bad_arguments(tmp_path, capsys):
         with pytest.raises(SystemExit) as exit_:
             theta_search.main([*args, "--out", str(tmp_path / "s")])
         assert exit_.value.code == 2 and words in capsys.readouterr().err
+
+
+def test_theta_actions_through_the_rllib_adapter_and_module(tmp_path, capsys):
+    """``env.theta_action: true`` on the RLlib path: the adapter passes RLlib's checker with
+    three action components, and a trained module's policy answers with three."""
+    cfg = small_cfg()
+    cfg["env"]["theta_action"] = True
+    env = RSVOMultiAgentEnv({"cfg": cfg})
+    check_multiagent_environments(env)
+    assert env.action_spaces["agent_0"].shape == (3,)
+    out = tmp_path / "run"
+    args = [*TINY, "--set", "env.theta_action=true", "--out", str(out)]
+    assert train.main(args) == 0
+    assert evaluate.main([str(out / "checkpoint"), "--episodes", "2"]) == 0
+    report = json.loads((out / "evaluation.json").read_text())
+    assert report["policy"]["collisions"] == 0 and report["policy"]["infeasible"] == 0
