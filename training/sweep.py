@@ -116,30 +116,20 @@ def theta_name(cfg: dict[str, Any]) -> str:
 
 
 def run_grid(grid: list[dict[str, Any]], args: argparse.Namespace) -> list[dict[str, Any]]:
-    import ray
     from ray import tune
 
-    ray.init(address=args.address, include_dashboard=False, log_to_driver=False)
-    try:
-        tuner = tune.Tuner(
-            tune.with_resources(trial, {"cpu": 1}),
-            param_space={
-                "cfg": tune.grid_search(grid),
-                "episodes": args.episodes,
-                "eval_seed": args.eval_seed,
-            },
-            tune_config=tune.TuneConfig(trial_dirname_creator=trial_name),
-            run_config=tune.RunConfig(
-                name="sweep", storage_path=str(Path(args.out).resolve()), verbose=0
-            ),
-        )
-        results = tuner.fit()
-    finally:
-        ray.shutdown()
+    from training.tune_runs import fit
+
+    results = fit(
+        trial,
+        {"cfg": tune.grid_search(grid), "episodes": args.episodes, "eval_seed": args.eval_seed},
+        tune.TuneConfig(trial_dirname_creator=trial_name),
+        "sweep",
+        args.out,
+        args.address,
+    )
     rows = []
     for res in results:
-        if res.error is not None:
-            raise RuntimeError(f"a sweep trial failed: {res.error}")
         cfg, m = res.config["cfg"], res.metrics
         rows.append(
             {

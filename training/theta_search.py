@@ -64,9 +64,10 @@ def trial(config: dict[str, Any]) -> None:
 def search(params: dict[str, Any], args: argparse.Namespace) -> list[dict[str, Any]]:
     """Every trial's theta and measures, in the order they ran."""
     import optuna
-    import ray
     from ray import tune
     from ray.tune.search.optuna import OptunaSearch
+
+    from training.tune_runs import fit
 
     n = params["n"]
     names = [f"theta_{i}" for i in range(n)]
@@ -78,29 +79,22 @@ def search(params: dict[str, Any], args: argparse.Namespace) -> list[dict[str, A
         points_to_evaluate=starts,
     )
     space: dict[str, Any] = {name: tune.loguniform(args.low, args.high) for name in names}
-    ray.init(address=args.address, include_dashboard=False, log_to_driver=False)
-    try:
-        tuner = tune.Tuner(
-            tune.with_resources(trial, {"cpu": 1}),
-            param_space={**space, "params": params},
-            tune_config=tune.TuneConfig(
-                search_alg=searcher,
-                num_samples=args.trials,
-                max_concurrent_trials=args.concurrency,
-                reuse_actors=True,  # one worker, its compiled kernels loaded once
-                trial_dirname_creator=lambda t: f"trial_{t.trial_id}",
-            ),
-            run_config=tune.RunConfig(
-                name="theta_search", storage_path=str(Path(args.out).resolve()), verbose=0
-            ),
-        )
-        results = tuner.fit()
-    finally:
-        ray.shutdown()
+    results = fit(
+        trial,
+        {**space, "params": params},
+        tune.TuneConfig(
+            search_alg=searcher,
+            num_samples=args.trials,
+            max_concurrent_trials=args.concurrency,
+            reuse_actors=True,  # one worker, its compiled kernels loaded once
+            trial_dirname_creator=lambda t: f"trial_{t.trial_id}",
+        ),
+        "theta_search",
+        args.out,
+        args.address,
+    )
     rows = []
     for res in results:
-        if res.error is not None:
-            raise RuntimeError(f"a search trial failed: {res.error}")
         theta = [float(res.config[name]) for name in names]
         keys = ("completion", *STATS)
         rows.append({"theta": theta, **{k: res.metrics[k] for k in keys}})
