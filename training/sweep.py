@@ -21,9 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from rsvo_env.cli.arguments import count, output_problem
+from rsvo_env.cli.arguments import count
 from rsvo_env.cli.main import Parser
 from training import config as configs
+from training import tune_runs
 
 THETAS = ("random", "paper", "equal")
 
@@ -72,12 +73,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--episodes", type=count(1), default=100)
     p.add_argument("--eval-seed", type=count(0), default=1000)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
-    p.add_argument("--address", help="a running Ray cluster (default: a local instance)")
-    p.add_argument("--out", required=True)
-    args = p.parse_args(argv)
-    problem = output_problem(Path(args.out), directory=True)
-    if problem:
-        p.exit(2, f"{p.prog}: error: --out {problem}\n")
+    args = tune_runs.parse(p, argv)
     try:
         base = configs.load(args.scenario)
         for assignment in args.set:
@@ -118,9 +114,7 @@ def theta_name(cfg: dict[str, Any]) -> str:
 def run_grid(grid: list[dict[str, Any]], args: argparse.Namespace) -> list[dict[str, Any]]:
     from ray import tune
 
-    from training.tune_runs import fit
-
-    results = fit(
+    results = tune_runs.fit(
         trial,
         {"cfg": tune.grid_search(grid), "episodes": args.episodes, "eval_seed": args.eval_seed},
         tune.TuneConfig(trial_dirname_creator=trial_name),

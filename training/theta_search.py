@@ -25,10 +25,11 @@ from typing import Any
 import numpy as np
 import yaml
 
-from rsvo_env.cli.arguments import count, output_problem
+from rsvo_env.cli.arguments import count
 from rsvo_env.cli.main import Parser
 from rsvo_env.validation import check_positive
 from rsvo_env.vector import BatchedEnv
+from training import tune_runs
 from training.personalities import FIELDS as STATS
 from training.personalities import PAPER_GAME, alternating, evaluate, objective
 
@@ -67,8 +68,6 @@ def search(params: dict[str, Any], args: argparse.Namespace) -> list[dict[str, A
     from ray import tune
     from ray.tune.search.optuna import OptunaSearch
 
-    from training.tune_runs import fit
-
     n = params["n"]
     names = [f"theta_{i}" for i in range(n)]
     starts = [dict(zip(names, alternating(n), strict=True)), dict.fromkeys(names, 1.0)]
@@ -79,7 +78,7 @@ def search(params: dict[str, Any], args: argparse.Namespace) -> list[dict[str, A
         points_to_evaluate=starts,
     )
     space: dict[str, Any] = {name: tune.loguniform(args.low, args.high) for name in names}
-    results = fit(
+    results = tune_runs.fit(
         trial,
         {**space, "params": params},
         tune.TuneConfig(
@@ -115,12 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--high", type=float, default=10.0, help="largest theta searched")
     p.add_argument("--search-seed", type=count(0), default=0)
     p.add_argument("--concurrency", type=count(1), default=1)
-    p.add_argument("--address", help="a running Ray cluster (default: a local instance)")
-    p.add_argument("--out", required=True)
-    args = p.parse_args(argv)
-    problem = output_problem(Path(args.out), directory=True)
-    if problem:
-        p.exit(2, f"{p.prog}: error: --out {problem}\n")
+    args = tune_runs.parse(p, argv)
     try:
         low, high = check_positive(args.low, "--low"), check_positive(args.high, "--high")
         if low > high:

@@ -38,3 +38,17 @@ def fit(
         if res.error is not None:
             raise RuntimeError(f"a {name} trial failed: {res.error}")
     return results
+
+
+def parse(parser: Any, argv: list[str] | None) -> Any:
+    """The arguments of a Tune command, with ``--address`` (a running cluster) and ``--out``
+    (a directory that can be written) added and checked."""
+    from rsvo_env.cli.arguments import output_problem
+
+    parser.add_argument("--address", help="a running Ray cluster (default: a local instance)")
+    parser.add_argument("--out", required=True)
+    args = parser.parse_args(argv)
+    problem = output_problem(Path(args.out), directory=True)
+    if problem:
+        parser.exit(2, f"{parser.prog}: error: --out {problem}\n")
+    return args
