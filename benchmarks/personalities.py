@@ -1,15 +1,19 @@
 """What personalities buy: fixed assignments (searched, the paper's, equal, random) and theta
-learned online, written to benchmarks/results/personalities.md with a figure of learned thetas.
+learned online, written to benchmarks/results/personalities.md with figures of learned thetas.
 
-    python -m training.theta_search --trials 300 --out runs/search_c6            # the .venv-rllib
+The searches run in the ``distributed`` venv (Ray Tune, Optuna), the rest in the main one:
+
+    python -m training.theta_search --trials 300 --out runs/search_c6
     python -m training.theta_search --set num_agents=12 --trials 300 --out runs/search_c12
-    python -m training.train --scenario circular_swap --set env.theta_action=true \\
-        --seed S --timesteps 3000000 --out runs/theta_action_sS                 # S = 0, 1, 2
-    python benchmarks/personalities.py --search runs/search_c6 runs/search_c12 --runs runs
+    python -m training.theta_search --scenario doorway --seeds 0 1 2 3 4 --trials 200 \
+        --out runs/search_doorway
+    python benchmarks/personalities.py --search runs/search_c6 runs/search_c12 \
+        runs/search_doorway --runs runs
 
-The learned rows also need ``runs/weighting_{symmetric,asymmetric}_sS`` (the commands of
-``benchmarks/results/training.md``). Fixed assignments run the paper's scripted controller behind
-the filter (``training.personalities``); learned ones the circular config's residual policy.
+The learned sections need the training runs whose commands the results file lists (circular
+game and crowd, three variants, three training seeds each); a missing run leaves its section
+out. Fixed assignments run the scripted controller behind the filter
+(``training.personalities``); learned ones each config's residual policy.
 """
 
 from __future__ import annotations
@@ -32,6 +36,8 @@ ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results"
 EPISODES, SEED = 100, 1000
 RANDOM_SETS = 200
+# the crowd as benchmarks/liveness.py runs it: gamma dt = 1, room to finish
+CROWD = {"dt": 0.05, "gamma": 20.0, "max_steps": 4000}
 LEARNED = {
     "symmetric": "residual, symmetric weights",
     "asymmetric": "residual, R-SVO weights, theta drawn from U(1, 10) each episode",
@@ -57,8 +63,9 @@ STUDIES = {
     "crowd": {
         "title": "crowd, 12 agents",
         "config": "residual on the paper's controller with yielding, interaction radius and "
-        "stall clock, dt 0.1, 15 M agent-steps, held-out episodes capped at 100 s",
-        "budget": "",
+        "stall clock, dt 0.1, held-out episodes capped at 100 s; 5 M agent-steps, a third of "
+        "the config's budget, the same for every variant",
+        "budget": " --timesteps 5000000",
         "names": {v: f"crowd_{v}_s{{s}}" for v in LEARNED},
     },
 }
@@ -97,7 +104,10 @@ def fixed_section(search: Path, lines: list[str]) -> None:
         """Each assignment's mean completion over the seeds (NaN if one never completes)."""
         return np.where(s["completed"] >= 0, s["completed"], np.nan).mean(axis=1)
 
-    base = completion(stats[equal])[0]
+    # the reference: equal scores, or the paper's assignment where equal scores never finish
+    ref_name = equal if np.isfinite(completion(stats[equal])[0]) else paper
+    base = completion(stats[ref_name])[0]
+    short = "equal" if ref_name == equal else "alternating"
     controller = "the paper's (`nominal=move_to_goal`)" if "nominal" in kwargs else "R-ORCA"
     others = {k: v for k, v in kwargs.items() if k != "nominal"}
     lines += [
@@ -110,15 +120,18 @@ def fixed_section(search: Path, lines: list[str]) -> None:
         f"[{low:g}, {high:g}]; the best theta by agent index: "
         f"{np.round(report['best']['theta'], 3).tolist()}.",
         "",
-        "| assignment | completion [steps] | gain over equal | deadlock resolution [steps] | "
-        "finished | collision steps | infeasible agent-steps | min distance [m] |",
+        f"| assignment | completion [steps] | gain over {short} | deadlock resolution [steps] | "
+        "sets finishing every seed | collision steps | infeasible agent-steps | "
+        "min distance [m] |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for name, s in stats.items():
         done = completion(s)
         gains = 1.0 - done / base
         if len(done) == 1:
-            comp, gain = f"{done[0]:.0f}", f"{gains[0]:+.1%}"
+            finished = np.isfinite(done[0])
+            comp = f"{done[0]:.0f}" if finished else "never all at goal"
+            gain = f"{gains[0]:+.1%}" if finished else "-"
             some = np.isfinite(s["resolution"]).any()
             res = f"{np.nanmean(s['resolution']):.0f}" if some else "-"
         else:
@@ -138,29 +151,58 @@ def fixed_section(search: Path, lines: list[str]) -> None:
     held_seeds = list(range(SEED, SEED + EPISODES))
     held_kwargs = {**kwargs, "random_rotation": True} if scenario == "circular_swap" else kwargs
     held = {k: evaluate(sets[k], held_seeds, scenario, **held_kwargs) for k in (equal, paper, best)}
-    ref = held[equal]["completed"][0]
+    ref = held[ref_name]["completed"][0]
     how = ", each rotating the circle by a random angle" if scenario == "circular_swap" else ""
     lines += [
         "",
         f"The same on {EPISODES} held-out seeds ({SEED}..{SEED + EPISODES - 1}{how}), paired "
-        "against equal scores seed by seed, over the seeds both finish:",
+        f"against {short} seed by seed, over the seeds both finish:",
         "",
         "| assignment | finished | completion [steps], mean | deadlock resolution [steps], "
-        "mean | paired difference ± SE | collision steps |",
-        "|---|---|---|---|---|---|",
+        "mean | paired difference ± SE | collision steps | infeasible agent-steps |",
+        "|---|---|---|---|---|---|---|",
     ]
-    for k, h in held.items():
-        c = h["completed"][0]
-        ok = (c >= 0) & (ref >= 0)
-        d = c[ok] - ref[ok]
-        se = d.std(ddof=1) / np.sqrt(len(d)) if len(d) > 1 else np.nan
-        res = np.nanmean(h["resolution"]) if np.isfinite(h["resolution"]).any() else np.nan
-        lines.append(
-            f"| {k} | {(c >= 0).sum()} / {EPISODES} | {c[c >= 0].mean():.1f} | {res:.1f} | "
-            f"{d.mean():+.1f} ± {se:.1f} ({d.mean() / ref[ok].mean():+.1%}) | "
-            f"{int(h['collision_steps'].sum())} |"
-        )
+    lines += [held_row(k, h, ref) for k, h in held.items()]
     lines.append("")
+
+
+def random_section(scenario: str, kwargs: dict[str, Any], lines: list[str]) -> None:
+    """A scenario whose layout changes with the seed, where a theta vector by agent index means
+    nothing: equal scores against every episode drawing its thetas from U(1, 10), paired on
+    the same held-out seeds."""
+    seeds = list(range(SEED, SEED + EPISODES))
+    equal = evaluate(np.ones((1, kwargs["num_agents"])), seeds, scenario, **kwargs)
+    drawn = evaluate(None, seeds, scenario, theta_range=[1.0, 10.0], **kwargs)
+    ref = equal["completed"][0]
+    lines += [
+        f"## {scenario}, {kwargs['num_agents']} agents: equal against random personalities",
+        "",
+        f"The scenario's scripted controller (R-ORCA) behind the filter, {kwargs}; "
+        f"{EPISODES} held-out seeds {SEED}..{SEED + EPISODES - 1}, a new layout each, paired "
+        "seed by seed over the seeds both finish.",
+        "",
+        "| theta | finished | completion [steps], mean | deadlock resolution [steps], mean | "
+        "paired difference ± SE | collision steps | infeasible agent-steps |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, h in (("equal", equal), ("U(1, 10) each episode", drawn)):
+        lines.append(held_row(name, h, ref))
+    lines.append("")
+
+
+def held_row(name: str, h: dict[str, np.ndarray], ref: np.ndarray) -> str:
+    """One row of held-out results paired against ``ref`` (completion steps, -1 unfinished)."""
+    c = h["completed"][0]
+    ok = (c >= 0) & (ref >= 0)
+    d = c[ok] - ref[ok]
+    se = d.std(ddof=1) / np.sqrt(len(d)) if len(d) > 1 else np.nan
+    paired = f"{d.mean():+.1f} ± {se:.1f} ({d.mean() / ref[ok].mean():+.1%})" if ok.any() else "-"
+    mean = f"{c[c >= 0].mean():.1f}" if (c >= 0).any() else "-"
+    res = f"{np.nanmean(h['resolution']):.1f}" if np.isfinite(h["resolution"]).any() else "-"
+    return (
+        f"| {name} | {(c >= 0).sum()} / {len(c)} | {mean} | {res} | {paired} | "
+        f"{int(h['collision_steps'].sum())} | {int(h['infeasible'].sum())} |"
+    )
 
 
 def learned_section(runs: Path, scenario: str, lines: list[str]) -> bool:
@@ -298,6 +340,8 @@ def main(argv: list[str] | None = None) -> int:
     ]
     for search in args.search:
         fixed_section(search, lines)
+    for n in (12, 100):
+        random_section("crowd", {"num_agents": n, **CROWD}, lines)
     for scenario, study in STUDIES.items():
         if not learned_section(args.runs, scenario, lines):
             continue

@@ -109,6 +109,12 @@ def test_batch_equals_single_envs_bit_for_bit_with_theta_actions(name):
     check_batch_equals_singles(name, True, {"max_steps": 70, "theta_action": True}, 300)
 
 
+def test_large_crowd_batch_equals_single_envs_bit_for_bit_with_theta_actions():
+    """Beyond the dense size: the grid search's floors follow the scores of every step."""
+    kwargs = {"max_steps": 25, "num_agents": 90, "theta_action": True}
+    check_batch_equals_singles("crowd", True, kwargs, 80)
+
+
 def adversarial(env, rng, strategy):
     """Each step's actions: the scripted command toward the goal, or straight at the nearest
     neighbour, with theta components chosen by ``strategy``."""
