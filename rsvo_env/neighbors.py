@@ -32,10 +32,31 @@ def env_offsets(positions: NDArray[np.float64], margin: float = 0.0) -> NDArray[
     return shift
 
 
+# Which kernel serves which batch (measured with benchmarks/knn_speed.py, one thread). Insertion
+# costs ~n^2 k with a mispredicted branch per insertion; ranking ~n^3 per env whatever k, without
+# branches; the env-lanes kernel inserts branch-free into all envs at once, vectorised across
+# envs, with a fixed cost per (agent, neighbour, slot) that many envs amortise.
+LANES_MIN_ENVS = 32
+RANKED_MIN_AGENTS, RANKED_MAX_AGENTS = 8, 32
+
+
 @njit(cache=True)
 def _knn_dense(x, k, dist, idx):
-    """k nearest of each agent in its env, by insertion into a sorted list: a strictly smaller
-    squared distance goes first, so ties keep the lower index (a stable sort)."""
+    """k nearest of each agent in its env, nearest first; a tie goes to the lower index (the
+    order of a stable sort on the squared distance). All three kernels give it bit for bit."""
+    E, n = x.shape[0], x.shape[1]
+    if E >= LANES_MIN_ENVS:
+        _knn_lanes(x, k, dist, idx)
+    elif RANKED_MIN_AGENTS <= n <= RANKED_MAX_AGENTS:
+        _knn_ranked(x, k, dist, idx)
+    else:
+        _knn_inserted(x, k, dist, idx)
+
+
+@njit(cache=True)
+def _knn_inserted(x, k, dist, idx):
+    """:func:`_knn_dense` by insertion into a sorted list: a strictly smaller squared distance
+    goes first, so ties keep the lower index."""
     E, n = x.shape[0], x.shape[1]
     d2 = np.empty(k)
     for e in range(E):
@@ -61,6 +82,92 @@ def _knn_dense(x, k, dist, idx):
                     m += 1
             for p in range(k):
                 dist[e, i, p] = np.sqrt(d2[p])
+
+
+@njit(cache=True)
+def _knn_ranked(x, k, dist, idx):
+    """:func:`_knn_dense` by ranks: agent j's rank among agent i's neighbours counts the
+    neighbours q nearer than j, and those as near with q < j. ``d2`` is symmetric, so for one
+    (j, q) the count runs over all agents i along a row, branch-free and vectorised."""
+    E, n = x.shape[0], x.shape[1]
+    d2 = np.empty((n, n))
+    rank = np.empty(n, dtype=np.int64)
+    # slot k takes every neighbour ranked k or beyond, so the scatter needs no branch
+    near_d2 = np.empty((n, k + 1))
+    near = np.empty((n, k + 1), dtype=np.int64)
+    for e in range(E):
+        for j in range(n):
+            for i in range(n):
+                dx = x[e, i, 0] - x[e, j, 0]
+                dy = x[e, i, 1] - x[e, j, 1]
+                d2[j, i] = dx * dx + dy * dy
+            d2[j, j] = np.inf
+        for j in range(n):
+            rank[:] = 0
+            for q in range(j):
+                for i in range(n):
+                    rank[i] += d2[q, i] <= d2[j, i]
+            for q in range(j + 1, n):
+                for i in range(n):
+                    rank[i] += d2[q, i] < d2[j, i]
+            for i in range(n):
+                s = min(rank[i], k)
+                near_d2[i, s] = d2[j, i]
+                near[i, s] = j
+        for i in range(n):
+            for p in range(k):
+                dist[e, i, p] = np.sqrt(near_d2[i, p])
+                idx[e, i, p] = near[i, p]
+
+
+@njit(cache=True)
+def _slot_update(d2_before, d2_slot, near_before, near_slot, d2, j):
+    """One slot of a sorted list, in every env at once, as :func:`_knn_inserted` would leave it
+    after offering neighbour j at squared distance ``d2``: the slot takes the one before it if
+    that is farther than ``d2``, else ``d2`` if the slot itself is farther, else stays. Loads
+    come before the selects so that the loop vectorises."""
+    for e in range(d2.shape[0]):
+        before, slot, v = d2_before[e], d2_slot[e], d2[e]
+        i_before, i_slot = near_before[e], near_slot[e]
+        shift, take = before > v, slot > v
+        kept = v if take else slot
+        i_kept = j if take else i_slot
+        d2_slot[e] = before if shift else kept
+        near_slot[e] = i_before if shift else i_kept
+
+
+@njit(cache=True)
+def _knn_lanes(x, k, dist, idx):
+    """:func:`_knn_dense` across envs: agent i's sorted list of every env is a column of
+    (k + 1, E) arrays whose row 0 is a sentinel nearer than anything, and each neighbour j is
+    offered to all envs at once, slot by slot from the last (:func:`_slot_update`)."""
+    E, n = x.shape[0], x.shape[1]
+    xs = np.empty((n, E))
+    ys = np.empty((n, E))
+    for e in range(E):
+        for i in range(n):
+            xs[i, e] = x[e, i, 0]
+            ys[i, e] = x[e, i, 1]
+    d2_list = np.empty((k + 1, E))
+    near = np.empty((k + 1, E), dtype=np.int64)
+    d2 = np.empty(E)
+    for i in range(n):
+        d2_list[0] = -1.0
+        d2_list[1:] = np.inf
+        near[:] = 0
+        for j in range(n):
+            if j == i:
+                continue
+            for e in range(E):
+                dx = xs[i, e] - xs[j, e]
+                dy = ys[i, e] - ys[j, e]
+                d2[e] = dx * dx + dy * dy
+            for p in range(k, 0, -1):
+                _slot_update(d2_list[p - 1], d2_list[p], near[p - 1], near[p], d2, j)
+        for e in range(E):
+            for p in range(k):
+                dist[e, i, p] = np.sqrt(d2_list[p + 1, e])
+                idx[e, i, p] = near[p + 1, e]
 
 
 @njit(cache=True)

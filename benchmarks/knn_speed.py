@@ -1,0 +1,99 @@
+"""The k-nearest-neighbour kernels of ``rsvo_env.neighbors``, each timed on the same batches.
+
+Every (envs E, agents N, k) cell times insertion, ranking and env lanes on the same random
+positions (fresh positions each call, so that no branch predictor learns one answer), one
+thread, alternating bursts, the best of ``--repeats``; and names the kernel that
+``_knn_dense`` picks there by its thresholds, with its time against the fastest one. Writes
+``benchmarks/results/knn_speed.md``.
+
+    python benchmarks/knn_speed.py [--repeats 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from rsvo_env import neighbors
+
+ROOT = Path(__file__).resolve().parents[1]
+KERNELS = {
+    "insertion": neighbors._knn_inserted,
+    "ranking": neighbors._knn_ranked,
+    "env lanes": neighbors._knn_lanes,
+}
+CELLS = [(e, n, k) for e in (1, 8, 16, 32, 64, 256) for n in (4, 8, 16, 32, 64) for k in (3, 6)]
+
+
+def picked(e: int, n: int, k: int) -> str:
+    """The kernel ``_knn_dense`` runs for this batch (its thresholds, read back)."""
+    if e >= neighbors.LANES_MIN_ENVS:
+        return "env lanes"
+    if neighbors.RANKED_MIN_AGENTS <= n <= neighbors.RANKED_MAX_AGENTS:
+        return "ranking"
+    return "insertion"
+
+
+def time_cell(e: int, n: int, k: int, repeats: int) -> dict[str, float]:
+    rng = np.random.default_rng(e * 1000 + n * 10 + k)
+    calls = max(4, 8000 // (e * n))
+    batches = rng.uniform(0.0, 2.0 * np.sqrt(n), (calls, e, n, 2))
+    dist, idx = np.empty((e, n, k)), np.empty((e, n, k), dtype=np.int64)
+    best = dict.fromkeys(KERNELS, np.inf)
+    for _ in range(repeats):
+        for name, kernel in KERNELS.items():
+            start = time.perf_counter()
+            for c in range(calls):
+                kernel(batches[c], k, dist, idx)
+            best[name] = min(best[name], (time.perf_counter() - start) / calls)
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args()
+    for kernel in KERNELS.values():  # compile outside the timing
+        kernel(np.zeros((1, 4, 2)) + np.arange(4)[:, None], 2, np.empty((1, 4, 2)),
+               np.empty((1, 4, 2), dtype=np.int64))  # fmt: skip
+    rows, worst = [], 1.0
+    for e, n, k in CELLS:
+        if k >= n:
+            continue
+        t = time_cell(e, n, k, args.repeats)
+        fastest = min(t, key=t.get)
+        choice = picked(e, n, k)
+        worst = max(worst, t[choice] / t[fastest])
+        per = {name: f"{t[name] / (e * n) * 1e9:,.0f}" for name in KERNELS}
+        rows.append(
+            f"| {e} | {n} | {k} | {per['insertion']} | {per['ranking']} | {per['env lanes']} "
+            f"| {choice} | {t[choice] / t[fastest]:.2f} |"
+        )
+        print(rows[-1], flush=True)
+    text = "\n".join([
+        "# k-nearest-neighbour kernels",
+        "",
+        f"Written by `python benchmarks/knn_speed.py` ({platform.machine()}, one thread, "
+        f"Python {platform.python_version()}). Nanoseconds per agent per query, the best of "
+        f"{args.repeats} alternating bursts; fresh random positions every call. All three "
+        "kernels return the same neighbours bit for bit (`tests/test_neighbors.py`).",
+        "",
+        "| E | N | k | insertion [ns] | ranking [ns] | env lanes [ns] | picked "
+        "| picked / fastest |",
+        "|---|---|---|---|---|---|---|---|",
+        *rows,
+        "",
+        f"The picked kernel is at most {worst:.2f}x the fastest of the three in every cell.",
+        "",
+    ])  # fmt: skip
+    out = ROOT / "benchmarks" / "results" / "knn_speed.md"
+    out.write_text(text)
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
