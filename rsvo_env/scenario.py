@@ -20,7 +20,14 @@ from rsvo_env import dynamics, nominal, rorca
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.obstacles import Obstacles
 from rsvo_env.planar import within
-from rsvo_env.validation import check_count, check_positive, check_real, check_theta, real_array
+from rsvo_env.validation import (
+    check_count,
+    check_positive,
+    check_real,
+    check_theta,
+    check_theta_interval,
+    real_array,
+)
 
 COMMON_DEFAULTS: dict[str, Any] = {
     "dt": 0.01,
@@ -134,19 +141,12 @@ class Scenario:
         """Checks that relate parameters of a scenario to one another (a subclass's own)."""
 
     def _check_theta_range(self, value: Any) -> tuple[float, float]:
-        arr = real_array(value, f"{self.name}.theta_range")
-        if arr.shape != (2,) or not np.isfinite(arr).all() or not 0 < arr[0] <= arr[1]:
-            raise ValueError(
-                f"{self.name}.theta_range = {value!r} must be (low, high) with 0 < low <= high"
-            )
-        if arr[1] > self.params["theta_max"]:
-            raise ValueError(
-                f"{self.name}.theta_range = {value!r} exceeds theta_max = "
-                f"{self.params['theta_max']}"
-            )
+        low_high = check_theta_interval(
+            value, f"{self.name}.theta_range", self.params["theta_max"]
+        )
         if self.params["theta"] is not None:
             raise ValueError(f"{self.name}: give theta or theta_range, not both")
-        return float(arr[0]), float(arr[1])
+        return low_high
 
     # -- parameters the env reads -------------------------------------------------------------
     @property

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.validation import check_flag, real_array
+from rsvo_env.validation import check_flag, check_theta_interval
 
 # the range when none is given: the personalities the paper's examples use, both ways
 DEFAULT_RANGE = (0.1, 10.0)
@@ -58,13 +58,4 @@ def theta_action_of(enabled: Any, theta_range: Any, theta_max: float) -> ThetaAc
             raise TypeError("theta_action_range needs theta_action=True")
         return None
     value = DEFAULT_RANGE if theta_range is None else theta_range
-    arr = real_array(value, "theta_action_range")
-    if arr.shape != (2,) or not np.isfinite(arr).all() or not 0 < arr[0] <= arr[1]:
-        raise ValueError(
-            f"theta_action_range = {value!r} must be (low, high) with 0 < low <= high"
-        )
-    if arr[1] > theta_max:
-        raise ValueError(
-            f"theta_action_range = {value!r} exceeds the scenario's theta_max = {theta_max}"
-        )
-    return ThetaAction(float(arr[0]), float(arr[1]))
+    return ThetaAction(*check_theta_interval(value, "theta_action_range", theta_max))

@@ -62,6 +62,16 @@ def check_theta(
     return arr
 
 
+def check_theta_interval(value: ArrayLike, name: str, theta_max: float) -> tuple[float, float]:
+    """A range of personality scores (low, high): finite, 0 < low <= high <= ``theta_max``."""
+    arr = real_array(value, name)
+    if arr.shape != (2,) or not np.isfinite(arr).all() or not 0 < arr[0] <= arr[1]:
+        raise ValueError(f"{name} = {value!r} must be (low, high) with 0 < low <= high")
+    if arr[1] > theta_max:
+        raise ValueError(f"{name} = {value!r} exceeds the scenario's theta_max = {theta_max}")
+    return float(arr[0]), float(arr[1])
+
+
 def check_vectors(
     values: ArrayLike,
     name: str,

@@ -173,3 +173,34 @@ def test_theta_changed_every_step_never_collides(n, steps, theta_range, strategy
         assert closest <= R * (1 + 1e-6)
     assert (info["episode_collision_steps"] == 0).all()
     assert (info["episode_infeasible"] == 0).all()
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1e3])
+@pytest.mark.parametrize("strategy", ["bang_bang", "worst"])
+def test_theta_actions_keep_the_guarantee_in_any_units(scale, strategy):
+    """The crowd of 100 in millimetres and in kilometres (every length scaled: radius, speed
+    limit, goal tolerance; time not): theta redrawn every step over (1e-3, 1e3), the same
+    margin relative to R, and the adversary still presses pairs into contact."""
+    env = BatchedEnv(
+        "crowd",
+        num_envs=2,
+        num_agents=100,
+        theta_action=True,
+        theta_action_range=(1e-3, 1e3),
+        max_steps=151,
+        safety_radius=scale,
+        u_max=2.0 * scale,
+        goal_tolerance=0.05 * scale,
+        **CROWD,
+    )
+    env.reset(seed=7)
+    rng = np.random.default_rng(7)
+    R = env.scenario.params["safety_radius"]
+    closest = np.inf
+    for _ in range(150):
+        _, _, _, _, info = env.step(adversarial(env, rng, strategy))
+        closest = min(closest, info["min_distance"].min())
+        assert info["min_distance"].min() >= R * (1 - 1e-9)
+        assert info["feasible"].all() and not info["cost"].any()
+    if strategy == "worst":
+        assert closest <= R * (1 + 1e-6)
