@@ -94,6 +94,8 @@ def check_vectors(
         rows = "N" if n is None else str(n)
         want = f"({', '.join([*map(str, lead or ()), rows])}, {width})"
         raise ValueError(f"{name} has shape {arr.shape}, expected {want}")
+    if all_finite(arr):  # one compiled pass; the slow search below only names the culprit
+        return arr
     bad = ~np.isfinite(arr).all(axis=-1)
     if bad.any():
         idx = tuple(int(i) for i in np.argwhere(bad)[0])

@@ -16,25 +16,43 @@ from rsvo_env import threads
 from rsvo_env.barriers import single_integrator_row, support
 from rsvo_env.solvers.exact import solve_rows
 
+# Up to this many agents an env, examining every pair here costs less than the general path's
+# pair search, row packing and batched solve (measured: benchmarks/dense_filter_speed.py).
+MAX_AGENTS = 350
+
 
 @njit(cache=True, inline="always")
 def _one_env(
-    e, x, nom, omega, gamma, radii, lo, hi, rows, out, feasible, active, violation, n_rows, moved
+    e, x, nom, omega, gamma, radii, lo, hi, buf, rows, out, feasible, active, violation, n_rows,
+    moved,
 ):  # fmt: skip
     n = x.shape[1]
+    xs, ys, rs, h, margin = buf
+    for j in range(n):
+        xs[j], ys[j], rs[j] = x[e, j, 0], x[e, j, 1], radii[e, j]
     min_h = np.inf
     for i in range(n):
-        k = 0
         lo0, lo1, hi0, hi1 = lo[e, i, 0], lo[e, i, 1], hi[e, i, 0], hi[e, i, 1]
+        xi, yi, ri = xs[i], ys[i], rs[i]
+        # First every neighbour's barrier value and by how much its row clears the box (it
+        # can bind only where b < support), branch-free so that the loop vectorises; then the
+        # few rows that can bind, in neighbour order.
         for j in range(n):
-            if j == i:
-                continue
-            R = radii[e, i] + radii[e, j]
-            ax, ay, b, h = single_integrator_row(
-                x[e, i, 0], x[e, i, 1], x[e, j, 0], x[e, j, 1], omega[e, i, j], gamma, R * R
-            )
-            min_h = min(min_h, h)
-            if b < support(ax, ay, lo0, lo1, hi0, hi1):  # else it cannot bind in the box
+            R = ri + rs[j]
+            w = omega[e, i, j]
+            ax, ay, b, hj = single_integrator_row(xi, yi, xs[j], ys[j], w, gamma, R * R)
+            h[j] = hj
+            margin[j] = b - support(ax, ay, lo0, lo1, hi0, hi1)
+        h[i], margin[i] = np.inf, 0.0
+        for j in range(n):
+            min_h = min(min_h, h[j])
+        k = 0
+        for j in range(n):
+            if margin[j] < 0.0:
+                R = ri + rs[j]
+                ax, ay, b, _ = single_integrator_row(
+                    xi, yi, xs[j], ys[j], omega[e, i, j], gamma, R * R
+                )
                 norm = np.hypot(ax, ay)
                 if norm > 0.0:
                     rows[k, 0], rows[k, 1], rows[k, 2] = ax / norm, ay / norm, b / norm
@@ -50,14 +68,21 @@ def _one_env(
     return min_h
 
 
+@njit(cache=True, inline="always")
+def _buffers(n):
+    """One env's positions (x, y), radii, barrier values and box margins, one slot an agent."""
+    return np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+
+
 @njit(cache=True)
 def _serial(x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violation, n_rows, min_h,
             moved):  # fmt: skip
+    buf = _buffers(x.shape[1])
     rows = np.empty((max(x.shape[1] - 1, 1), 3))
     for e in range(x.shape[0]):
         min_h[e] = _one_env(
-            e, x, nom, omega, gamma, radii, lo, hi, rows, out, feasible, active, violation, n_rows,
-            moved,
+            e, x, nom, omega, gamma, radii, lo, hi, buf, rows, out, feasible, active, violation,
+            n_rows, moved,
         )  # fmt: skip
 
 
@@ -65,10 +90,11 @@ def _serial(x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violatio
 def _parallel(x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violation, n_rows, min_h,
               moved):  # fmt: skip
     for e in prange(x.shape[0]):
+        buf = _buffers(x.shape[1])
         rows = np.empty((max(x.shape[1] - 1, 1), 3))
         min_h[e] = _one_env(
-            e, x, nom, omega, gamma, radii, lo, hi, rows, out, feasible, active, violation, n_rows,
-            moved,
+            e, x, nom, omega, gamma, radii, lo, hi, buf, rows, out, feasible, active, violation,
+            n_rows, moved,
         )  # fmt: skip
 
 
