@@ -50,6 +50,7 @@ class SafetyFilter:
             raise TypeError("pass either a FilterConfig or keyword arguments, not both")
         self.config = config if config is not None else FilterConfig(**kwargs)  # type: ignore[arg-type]
         self._last_floor: tuple[NDArray, pairs.Floor] | None = None
+        self._last_matrix: tuple[NDArray, NDArray] | None = None
         self._default_bodies: dict[tuple[int, int], Bodies] = {}
 
     def pair_radius(
@@ -228,8 +229,11 @@ class SafetyFilter:
             obstacles = None
         dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
         fast = not with_rows and obstacles is None and cfg.model.dense_kernel
-        if dense and fast and cfg.solver == "exact":
-            return self._apply_dense(positions, nominal, theta, omega, bodies)
+        if fast and cfg.solver == "exact" and cfg.neighbor_radius is None:
+            if n <= dense_solver.MAX_AGENTS:
+                if omega is None:
+                    omega = self._matrix(theta, weighting)
+                return self._apply_dense(positions, nominal, omega, bodies)
         solve_nominal, solve_box, rotation = nominal, bodies, None
         if cfg.model.needs_headings:
             # the rows live on points of the model's own (the unicycle's look-ahead points)
@@ -291,17 +295,27 @@ class SafetyFilter:
             self._last_floor = last = (theta.copy(), pairs.floor_of(theta, mode))
         return last[1]
 
+    def _matrix(self, theta: NDArray, weighting: Sequence[str] | None) -> NDArray:
+        """(E, N, N) weight matrices of ``theta`` (E, N): each env's named ``weighting``, or
+        the configured one. A caller steps with the same scores step after step, so the last
+        matrices of a named configured weighting are kept (a callable is asked every time)."""
+        if weighting is not None:
+            return np.stack([weight_matrix(t, m) for t, m in zip(theta, weighting, strict=True)])
+        if callable(self.config.weighting):
+            return weight_matrix(theta, self.config.weighting)
+        last = self._last_matrix
+        if last is None or not np.array_equal(last[0], theta):
+            self._last_matrix = last = (theta.copy(), weight_matrix(theta, self.config.weighting))
+        return last[1]
+
     def _apply_dense(
         self,
         positions: NDArray,
         nominal: NDArray,
-        theta: NDArray,
-        omega: NDArray | None,
+        omega: NDArray,
         bodies: Bodies,
     ) -> FilterResult:
         cfg = self.config
-        if omega is None:
-            omega = weight_matrix(theta, cfg.weighting)
         actions, feasible, active, violation, n_rows, min_h, intervention = (
             dense_solver.filter_dense(
                 positions, nominal, omega, cfg.gamma, bodies.radii, bodies.lo, bodies.hi

@@ -9,6 +9,7 @@ import pytest
 from rsvo_env import pairs, solvers
 from rsvo_env.bodies import Bodies
 from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.solvers import dense as dense_solver
 
 
 def scene(n: int, seed: int, scale: float = 1.0):
@@ -87,12 +88,15 @@ def test_culled_equals_all_pairs(n, seed):
         x = x + dt * res.actions
 
 
-def test_compiled_dense_pass_equals_the_general_path():
-    x, goals, theta, radii, u_max = scene(60, 5)
+@pytest.mark.parametrize("n", [60, 100, dense_solver.MAX_AGENTS])
+def test_compiled_dense_pass_equals_the_general_path(n):
+    """Up to the dense kernel's size, on both sides of the size where the general path stops
+    examining every pair and searches a grid per agent."""
+    x, goals, theta, radii, u_max = scene(n, 5)
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=3.0, dt=0.05))
     for _ in range(20):
         nominal = nominal_to(goals, x, u_max)
-        bodies = Bodies.of(flt.config, 1, 60, radii[None], u_max[None])
+        bodies = Bodies.of(flt.config, 1, n, radii[None], u_max[None])
         fast = flt.apply(x[None], nominal[None], theta[None], bodies=bodies)
         slow = flt.apply(x[None], nominal[None], theta[None], bodies=bodies, with_rows=True)
         assert fast.rows is None and slow.rows is not None
