@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,6 +21,8 @@ class FilterResult:
     arrays for a batch. ``feasible[i]`` is False when agent i's QP had no solution; its action is
     then the one that minimises the largest normalised violation, never the nominal, and
     ``max_violation[i]`` says by how much (metres of half-plane offset, 0 when feasible).
+    :attr:`rows` are every agent's rows; the compiled all-pairs pass keeps none, and builds
+    them on first access (the general path on the same inputs: the same rows).
     """
 
     actions: NDArray[np.float64]
@@ -31,7 +34,15 @@ class FilterResult:
     n_rows: NDArray[np.int64]
     n_unrecoverable_pairs: Any
     n_capped_shares: Any
-    rows: Rows | None = field(repr=False)
+    kept_rows: Rows | None = field(default=None, repr=False)
+    rows_later: Callable[[], Rows] | None = field(default=None, repr=False)
+
+    @property
+    def rows(self) -> Rows | None:
+        """The rows of every agent (None from a simulator's filter stage, which needs none)."""
+        if self.kept_rows is None and self.rows_later is not None:
+            self.kept_rows, self.rows_later = self.rows_later(), None
+        return self.kept_rows
 
     def squeeze(self) -> FilterResult:
         """The single-scene result of a batch of one."""
@@ -45,7 +56,8 @@ class FilterResult:
             n_rows=self.n_rows[0],
             n_unrecoverable_pairs=int(self.n_unrecoverable_pairs[0]),
             n_capped_shares=int(self.n_capped_shares[0]),
-            rows=self.rows,
+            kept_rows=self.kept_rows,
+            rows_later=self.rows_later,
         )
 
 

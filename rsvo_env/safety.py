@@ -183,11 +183,15 @@ class SafetyFilter:
             raise ValueError(
                 f"holonomic is for the unicycle's mixed crowds, not the {cfg.dynamics}"
             )
-        kw = {"with_rows": True, "bodies": bodies, "obstacles": caps, "headings": hd}
+        kw = {"bodies": bodies, "obstacles": caps, "headings": hd}
         if single:
+            pos, nom, th = pos[None], nom[None], th[None]
             vel = None if vel is None else vel[None]
-            return self.apply(pos[None], nom[None], th[None], vel, W, **kw).squeeze()
-        return self.apply(pos, nom, th, vel, W, **kw)
+        res = self.apply(pos, nom, th, vel, W, **kw)
+        if res.rows is None:  # the compiled pass keeps none: built if asked for, from a copy
+            args = tuple(None if a is None else a.copy() for a in (pos, nom, th, vel, W))
+            res.rows_later = lambda: self.apply(*args, with_rows=True, **kw).rows
+        return res.squeeze() if single else res
 
     def apply(
         self,
@@ -278,7 +282,7 @@ class SafetyFilter:
             n_rows=rows.counts.reshape(E, n),
             n_unrecoverable_pairs=per_env(env_of_row, rows.flat_unrecoverable, E) // 2,
             n_capped_shares=per_env(env_of_row, rows.flat_capped, E),
-            rows=rows,
+            kept_rows=rows,
         )
 
     def _floor(self, theta: NDArray, omega: NDArray | None) -> pairs.Floor:
@@ -332,7 +336,6 @@ class SafetyFilter:
             n_rows=n_rows,
             n_unrecoverable_pairs=zeros,
             n_capped_shares=zeros,
-            rows=None,
         )
 
     def _min_h(

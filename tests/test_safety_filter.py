@@ -195,3 +195,26 @@ def test_bad_omega_matrix():
     bad = np.array([[0, 0.4, 0.5], [0.4, 0, 0.5], [0.5, 0.5, 0]])
     with pytest.raises(ValueError, match=r"omega\[0, 1\] \+ omega\[1, 0\] = 1"):
         SafetyFilter(FilterConfig()).filter(**GOOD, omega=bad)
+
+
+@pytest.mark.parametrize("batched", [False, True])
+def test_rows_of_the_compiled_pass_are_built_when_asked_for(batched):
+    """The compiled all-pairs pass keeps no rows; ``res.rows`` builds them on first access, the
+    general path's rows of the inputs as they were (the caller's arrays may change since)."""
+    rng = np.random.default_rng(3)
+    n = 100
+    x = spaced_positions(rng, n, 1.0, spacing=1.05)
+    nominal, theta = rng.uniform(-2, 2, (n, 2)), rng.uniform(1, 10, n)
+    flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0))
+    args = (x[None], nominal[None], theta[None]) if batched else (x, nominal, theta)
+    res = flt.filter(*args)
+    assert res.kept_rows is None and res.rows_later is not None  # the compiled pass ran
+    want = flt.apply(x[None], nominal[None], theta[None], with_rows=True)
+    x += 100.0  # the caller moves on
+    rows = res.rows
+    assert res.rows is rows and res.rows_later is None  # built once
+    np.testing.assert_array_equal(rows.flat_A, want.rows.flat_A)
+    np.testing.assert_array_equal(rows.flat_b, want.rows.flat_b)
+    np.testing.assert_array_equal(rows.offsets, want.rows.offsets)
+    np.testing.assert_array_equal(res.actions.reshape(-1, 2), want.actions.reshape(-1, 2))
+    assert rows.n_pairs == want.rows.n_pairs > 0
