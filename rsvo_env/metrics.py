@@ -107,6 +107,27 @@ _NO_FEASIBLE = np.ones((0, 0), dtype=np.bool_)
 _NO_MIN_H = np.zeros(0)
 
 
+@njit(cache=True)
+def _flat(counts, min_distance, infeasible, arrival):
+    """The :data:`FLAT_FIELDS` arrays (E,), fresh, in one pass (a step's infos carry them)."""
+    E, n = arrival.shape
+    success = np.empty(E, dtype=np.bool_)
+    arrived = np.empty(E, dtype=np.int64)
+    makespan = np.empty(E, dtype=np.int64)
+    for e in range(E):
+        count, last = 0, -1
+        for i in range(n):
+            if arrival[e, i] >= 0:
+                count += 1
+                last = max(last, arrival[e, i])
+        arrived[e] = count
+        makespan[e] = last if count == n else -1
+        success[e] = counts[e, 3] >= 0
+    steps, completed, collisions = counts[:, 0].copy(), counts[:, 3].copy(), counts[:, 4].copy()
+    return (steps, success, completed, min_distance.copy(), collisions, infeasible.copy(),
+            arrived, makespan)  # fmt: skip
+
+
 class EpisodeMetrics:
     """Accumulates the running episode of each of E envs in (E,) and (E, N) arrays, without
     keeping more than per-agent sums; with ``record_series`` (one env only) also the per-step
@@ -225,17 +246,6 @@ class EpisodeMetrics:
             self.min_distance_series.append(float(self.step_series[0, 0]))
             self.avg_min_distance_series.append(float(self.step_series[0, 1]))
 
-    def _flat_values(self) -> dict[str, NDArray]:
-        return {
-            "steps": self.steps,
-            "success": self.completed >= 0,
-            "completed": self.completed,
-            "min_distance": self.min_distance,
-            "collision_steps": self.collision_steps,
-            "infeasible": self.infeasible,
-            "arrived": (self.arrival >= 0).sum(axis=-1),
-            "makespan": self.makespan,
-        }
 
     @property
     def makespan(self) -> NDArray[np.int64]:
@@ -244,12 +254,14 @@ class EpisodeMetrics:
 
     def flat(self) -> dict[str, NDArray]:
         """(E,) arrays ``episode_<field>`` of the running episodes (final on their last step)."""
-        values = self._flat_values()
-        return {f"episode_{k}": values[k].astype(dtype) for k, dtype in FLAT_FIELDS}
+        values = _flat(self.counts, self.min_distance, self.infeasible, self.arrival)
+        return {f"episode_{k}": v for (k, _), v in zip(FLAT_FIELDS, values, strict=True)}
 
     def flat_row(self, e: int = 0) -> tuple:
         """Env e's :meth:`flat` values, in :data:`FLAT_FIELDS` order, as Python scalars."""
         completed = int(self.completed[e])
+        arrival = self.arrival[e]
+        arrived = int(np.count_nonzero(arrival >= 0))
         # FLAT_FIELDS order; a test holds this row to flat()
         return (
             int(self.steps[e]),
@@ -258,8 +270,8 @@ class EpisodeMetrics:
             float(self.min_distance[e]),
             int(self.collision_steps[e]),
             int(self.infeasible[e]),
-            int((self.arrival[e] >= 0).sum()),
-            int(self.makespan[e]),
+            arrived,
+            int(arrival.max()) if arrived == arrival.shape[0] else -1,
         )
 
     def summary(self, e: int = 0) -> dict[str, Any]:

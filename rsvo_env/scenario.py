@@ -151,8 +151,13 @@ class Scenario:
     # -- parameters the env reads -------------------------------------------------------------
     @property
     def model(self) -> Dynamics:
-        """The dynamics model (``dynamics`` names it)."""
-        return dynamics.get(self.dynamics, f"{self.name}.dynamics")
+        """The dynamics model (``dynamics`` names it; looked up once a name, as the step asks
+        several times)."""
+        kept = self.__dict__.get("_model")
+        if kept is None or kept[0] != self.dynamics:
+            model = dynamics.get(self.dynamics, f"{self.name}.dynamics")
+            kept = self._model = (self.dynamics, model)
+        return kept[1]
 
     @property
     def limit_name(self) -> str:

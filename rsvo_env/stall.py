@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env import planar
@@ -54,9 +55,7 @@ class StallClock:
         self, distance: NDArray[np.float64], at_goal: NDArray[np.bool_], safety_radius: float
     ) -> None:
         """One step of every env: ``distance`` (E, N) to the goals after it."""
-        moved_on = (distance <= self.best - PROGRESS * safety_radius) | at_goal
-        self.best = np.where(moved_on, distance, self.best)
-        self.steps = np.where(moved_on, 0, self.steps + 1)
+        _tick(distance, at_goal, PROGRESS * safety_radius, self.best, self.steps)
 
     def value(self, envs: NDArray[np.int64] | slice = slice(None)) -> NDArray[np.float64]:
         """The observed clock (E, N) (of ``envs``): steps stalled over ``unit``."""
@@ -69,6 +68,20 @@ class StallClock:
     def bound(self, max_steps: int) -> float:
         """The largest value an episode of ``max_steps`` steps can show."""
         return max_steps / self.unit
+
+
+@njit(cache=True)
+def _tick(distance, at_goal, margin, best, steps):
+    """In place: an agent that came ``margin`` closer than its best (or is at its goal) starts
+    its clock again from its new best; every other agent's clock advances."""
+    E, n = distance.shape
+    for e in range(E):
+        for i in range(n):
+            if distance[e, i] <= best[e, i] - margin or at_goal[e, i]:
+                best[e, i] = distance[e, i]
+                steps[e, i] = 0
+            else:
+                steps[e, i] += 1
 
 
 def goal_distance(positions: NDArray[np.float64], goals: NDArray[np.float64]) -> NDArray:
