@@ -16,7 +16,7 @@ def plot(rows: list[dict], di: list[dict], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=120)
+    fig, ax = plt.subplots(figsize=(6.4, 5.4), dpi=120)
     for key, label, style in (
         ("ours_equal", "R-CBF filter, theta equal", "o-"),
         ("ours_spread", "R-CBF filter, theta 1..10", "s-"),
@@ -41,7 +41,8 @@ def plot(rows: list[dict], di: list[dict], path: Path) -> None:
     ax.set_ylabel("µs per agent-step (lower is better)")
     ax.set_title("Cost per agent of one filtered step, crowd scenario")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    # below the axes: inside, it hid the double integrator's points
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
