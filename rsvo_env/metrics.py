@@ -108,20 +108,26 @@ _NO_MIN_H = np.zeros(0)
 
 
 @njit(cache=True)
+def _arrivals(arrival):
+    """(agents arrived, makespan: the last first arrival, -1 until every agent has) of one
+    env's first-arrival steps (N,), -1 where not yet."""
+    count, last = 0, -1
+    for i in range(arrival.shape[0]):
+        if arrival[i] >= 0:
+            count += 1
+            last = max(last, arrival[i])
+    return count, last if count == arrival.shape[0] else -1
+
+
+@njit(cache=True)
 def _flat(counts, min_distance, infeasible, arrival):
     """The :data:`FLAT_FIELDS` arrays (E,), fresh, in one pass (a step's infos carry them)."""
-    E, n = arrival.shape
+    E = arrival.shape[0]
     success = np.empty(E, dtype=np.bool_)
     arrived = np.empty(E, dtype=np.int64)
     makespan = np.empty(E, dtype=np.int64)
     for e in range(E):
-        count, last = 0, -1
-        for i in range(n):
-            if arrival[e, i] >= 0:
-                count += 1
-                last = max(last, arrival[e, i])
-        arrived[e] = count
-        makespan[e] = last if count == n else -1
+        arrived[e], makespan[e] = _arrivals(arrival[e])
         success[e] = counts[e, 3] >= 0
     steps, completed, collisions = counts[:, 0].copy(), counts[:, 3].copy(), counts[:, 4].copy()
     return (steps, success, completed, min_distance.copy(), collisions, infeasible.copy(),
@@ -260,8 +266,7 @@ class EpisodeMetrics:
     def flat_row(self, e: int = 0) -> tuple:
         """Env e's :meth:`flat` values, in :data:`FLAT_FIELDS` order, as Python scalars."""
         completed = int(self.completed[e])
-        arrival = self.arrival[e]
-        arrived = int(np.count_nonzero(arrival >= 0))
+        arrived, makespan = _arrivals(self.arrival[e])
         # FLAT_FIELDS order; a test holds this row to flat()
         return (
             int(self.steps[e]),
@@ -271,7 +276,7 @@ class EpisodeMetrics:
             int(self.collision_steps[e]),
             int(self.infeasible[e]),
             arrived,
-            int(arrival.max()) if arrived == arrival.shape[0] else -1,
+            makespan,
         )
 
     def summary(self, e: int = 0) -> dict[str, Any]:
