@@ -51,8 +51,10 @@ def _span(v, r, lo, cell, m):
 def _pairs(x, radius, group, cell):
     """Flat pair keys ``e * n + i``, ``e * n + j`` (i < j) of agents closer than the larger of
     ``radius[i, group[j]]`` and ``radius[j, group[i]]``, each pair once: agent i scans group
-    g's grid within ``radius[i, g]``, and a pair is kept from i's scan unless j's own scan also
-    finds it and j < i (the same squared distance both ways)."""
+    g's grid within ``radius[i, g]``, and a pair is kept from the scan of the agent with the
+    larger radius against the other's group (the lower index on a tie), the one scan sure to
+    find it. So agent i skips group g when every member's radius against i's group exceeds
+    its own: each pair it could find, the member keeps."""
     E, n, K = radius.shape
     cap = max(16, 8 * E * n)
     I = np.empty(cap, dtype=np.int64)
@@ -60,6 +62,11 @@ def _pairs(x, radius, group, cell):
     m = 0
     for e in range(E):
         xe, re, ge = x[e], radius[e], group[e]
+        # smallest[g, h]: the smallest radius of a member of group g against group h
+        smallest = np.full((K, K), np.inf)
+        for j in range(n):
+            for h in range(K):
+                smallest[ge[j], h] = min(smallest[ge[j], h], re[j, h])
         for g in range(K):
             members = np.nonzero(ge == g)[0]
             if members.shape[0] == 0:
@@ -70,10 +77,10 @@ def _pairs(x, radius, group, cell):
             px, py, rr = xe[idx, 0].copy(), xe[idx, 1].copy(), re[idx].copy()
             for i in range(n):
                 ri = re[i, g]
-                if not ri > 0.0:
+                gi = ge[i]
+                if not ri > 0.0 or smallest[g, gi] > ri:
                     continue
                 r2 = ri * ri
-                gi = ge[i]
                 a0, b0 = _span(xe[i, 0], ri, lo0, c, nx)
                 a1, b1 = _span(xe[i, 1], ri, lo1, c, ny)
                 for gx in range(a0, b0 + 1):
@@ -86,8 +93,8 @@ def _pairs(x, radius, group, cell):
                             dx, dy = xe[i, 0] - px[s], xe[i, 1] - py[s]
                             d2 = dx * dx + dy * dy
                             rj = rr[s, gi]
-                            if d2 > r2 or (j < i and rj > 0.0 and d2 <= rj * rj):
-                                continue
+                            if d2 > r2 or (d2 <= rj * rj and (rj > ri or (rj == ri and j < i))):
+                                continue  # beyond i's radius, or j's scan keeps it
                             if m == cap:
                                 cap *= 2
                                 I2 = np.empty(cap, dtype=np.int64)

@@ -91,8 +91,10 @@ def brute_pairs(x, radius, group):
     return np.array(out, dtype=np.int64).reshape(-1, 2)
 
 
-@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("seed", range(12))
 def test_grid_search_equals_brute_force(seed):
+    """Each pair is kept by one scan (the larger radius, the lower index on a tie; a group
+    skipped by an agent whose every pair there a member keeps): ties of radii included."""
     rng = np.random.default_rng(seed)
     E, n, K = int(rng.integers(1, 4)), int(rng.integers(2, 90)), int(rng.integers(1, 4))
     scale = 10.0 ** rng.uniform(-3, 3)
@@ -100,7 +102,10 @@ def test_grid_search_equals_brute_force(seed):
     x[:, 1] = x[:, 0]  # coincident agents
     if seed % 2:
         x[..., 1] = 0.0  # all on a line: a degenerate box
-    radius = rng.uniform(0, 0.6, (E, n, K)) * scale
+    if seed % 3:
+        radius = rng.uniform(0, 0.6, (E, n, K)) * scale
+    else:  # few distinct radii: many pairs whose two radii are equal
+        radius = rng.choice([0.15, 0.3, 0.6], (E, n, K)) * scale
     radius[rng.uniform(size=(E, n, K)) < 0.2] = 0.0
     radius[0, 0, 0] = 1e300  # one agent that searches everywhere
     group = rng.integers(0, K, (E, n))
@@ -109,6 +114,19 @@ def test_grid_search_equals_brute_force(seed):
         np.testing.assert_array_equal(np.stack([I, J], axis=1), brute_pairs(x, radius, group))
     d = np.linalg.norm(x[:, :, None] - x[:, None], axis=-1) + np.where(np.eye(n), np.inf, 0)
     np.testing.assert_array_equal(grid.nearest_distance(x), d.min(axis=-1))
+
+
+@pytest.mark.parametrize("K", [1, 2, 3])
+def test_grid_search_with_every_radius_equal(K):
+    """Every radius the same: every pair a tie, which the lower index keeps; no agent may skip
+    a group whose radii merely equal its own."""
+    side = np.arange(6, dtype=float)
+    x = np.stack(np.meshgrid(side, side), -1).reshape(1, -1, 2)
+    n = x.shape[1]
+    radius = np.full((1, n, K), 1.5)
+    group = (np.arange(n) % K)[None].astype(np.int64)
+    I, J = grid.pairs_within_radii(x, radius, group)
+    np.testing.assert_array_equal(np.stack([I, J], axis=1), brute_pairs(x, radius, group))
 
 
 def all_pairs_double_integrator(flt, x, v, nominal, theta):
