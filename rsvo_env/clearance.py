@@ -23,7 +23,9 @@ def contact(
     (N,) body radii, ``capsules`` (E, O, 5) or None."""
     E, n = positions.shape[:2]
     out = np.full((E, n), np.inf)
-    if n >= 2:
+    if n >= 2 and np.all(radii == radii[0]):  # identical bodies: the nearest distance
+        out = grid.nearest_distance(positions) / (2.0 * radii[0])
+    elif n >= 2:
         d, nb = nearest_neighbors(positions, 1)
         r_max = float(radii.max())
         # the agent with the smallest ratio is within d1 (r_i + r_max) / (r_i + r_nb) of i

@@ -253,11 +253,6 @@ class EpisodeMetrics:
             self.avg_min_distance_series.append(float(self.step_series[0, 1]))
 
 
-    @property
-    def makespan(self) -> NDArray[np.int64]:
-        """(E,) the step the last agent first reached its goal, -1 until every agent has."""
-        return np.where((self.arrival >= 0).all(axis=-1), self.arrival.max(axis=-1), -1)
-
     def flat(self) -> dict[str, NDArray]:
         """(E,) arrays ``episode_<field>`` of the running episodes (final on their last step)."""
         values = _flat(self.counts, self.min_distance, self.infeasible, self.arrival)
@@ -285,14 +280,15 @@ class EpisodeMetrics:
         def step(x: NDArray) -> int | None:
             return None if x[e] < 0 else int(x[e])
 
+        arrived, makespan = _arrivals(self.arrival[e])
         out = {
             "steps": int(self.steps[e]),
             "success": bool(self.completed[e] >= 0),
             "deadlock_onset": step(self.deadlock_onset),
             "deadlock_resolved": step(self.deadlock_resolved),
             "completed": step(self.completed),
-            "makespan": step(self.makespan),
-            "arrived": int((self.arrival[e] >= 0).sum()),
+            "makespan": None if makespan < 0 else makespan,
+            "arrived": arrived,
             "min_distance": float(self.min_distance[e]),
             "n_collision_steps": int(self.collision_steps[e]),
             "n_infeasible": int(self.infeasible[e]),

@@ -11,8 +11,9 @@ as the stage of its step right before integration.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -49,8 +50,9 @@ class SafetyFilter:
         if config is not None and kwargs:
             raise TypeError("pass either a FilterConfig or keyword arguments, not both")
         self.config = config if config is not None else FilterConfig(**kwargs)  # type: ignore[arg-type]
-        self._last_floor: tuple[NDArray, pairs.Floor] | None = None
-        self._last_matrix: tuple[NDArray, NDArray] | None = None
+        # per kind ("floor", "matrix"): the last scores and what the configured weighting
+        # gave for them (a simulator calls with the same scores step after step)
+        self._kept: dict[str, tuple[NDArray, Any]] = {}
         self._default_bodies: dict[tuple[int, int], Bodies] = {}
 
     def pair_radius(
@@ -234,9 +236,8 @@ class SafetyFilter:
         dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
         fast = not with_rows and obstacles is None and cfg.model.dense_kernel
         if fast and cfg.solver == "exact" and cfg.neighbor_radius is None:
-            if n <= dense_solver.MAX_AGENTS:
-                if omega is None:
-                    omega = self._matrix(theta, weighting)
+            if n <= dense_solver.MAX_AGENTS:  # the compiled all-pairs pass
+                omega = self._matrix(theta, weighting) if omega is None else omega
                 return self._apply_dense(positions, nominal, omega, bodies)
         solve_nominal, solve_box, rotation = nominal, bodies, None
         if cfg.model.needs_headings:
@@ -288,16 +289,9 @@ class SafetyFilter:
     def _floor(self, theta: NDArray, omega: NDArray | None) -> pairs.Floor:
         """:func:`pairs.weight_floor` of the weights in force, from the scores alone (O(N)
         memory) for a named weighting."""
-        mode = self.config.weighting
         if omega is not None:  # a caller's matrix, whatever the configured mode says
             return pairs.weight_floor(omega)
-        if callable(mode):
-            return pairs.floor_of(theta, mode)
-        # a simulator calls with the same scores step after step: keep the last floor
-        last = self._last_floor
-        if last is None or not np.array_equal(last[0], theta):
-            self._last_floor = last = (theta.copy(), pairs.floor_of(theta, mode))
-        return last[1]
+        return self._of_scores("floor", theta, pairs.floor_of)
 
     def _matrix(self, theta: NDArray, weighting: Sequence[str] | None) -> NDArray:
         """(E, N, N) weight matrices of ``theta`` (E, N): each env's named ``weighting``, or
@@ -305,11 +299,17 @@ class SafetyFilter:
         matrices of a named configured weighting are kept (a callable is asked every time)."""
         if weighting is not None:
             return np.stack([weight_matrix(t, m) for t, m in zip(theta, weighting, strict=True)])
-        if callable(self.config.weighting):
-            return weight_matrix(theta, self.config.weighting)
-        last = self._last_matrix
+        return self._of_scores("matrix", theta, weight_matrix)
+
+    def _of_scores(self, kind: str, theta: NDArray, build: Callable) -> Any:
+        """``build(theta, weighting)`` of the configured weighting, kept for the last scores of
+        each ``kind`` when the weighting is named (a callable is asked every time)."""
+        mode = self.config.weighting
+        if callable(mode):
+            return build(theta, mode)
+        last = self._kept.get(kind)
         if last is None or not np.array_equal(last[0], theta):
-            self._last_matrix = last = (theta.copy(), weight_matrix(theta, self.config.weighting))
+            last = self._kept[kind] = (theta.copy(), build(theta, mode))
         return last[1]
 
     def _apply_dense(

@@ -10,7 +10,6 @@ from numpy.typing import NDArray
 
 from rsvo_env.clearance import contact
 from rsvo_env.dynamics import Dynamics
-from rsvo_env.neighbors import nearest_distance
 from rsvo_env.obstacles import nearest_points
 
 if TYPE_CHECKING:
@@ -24,10 +23,7 @@ def check_scene(scenario: Scenario, starts: NDArray, goals: NDArray, capsules: N
     radii = scenario.radii
     n = len(starts)
     if n >= 2:
-        if np.all(radii == radii[0]):  # identical bodies: the nearest distance says it all
-            ratio = nearest_distance(starts[None])[0] / (2.0 * radii[0])
-        else:
-            ratio = contact(starts[None], radii)[0]  # O(N) on a grid
+        ratio = contact(starts[None], radii)[0]  # O(N) on a grid
         i = int(np.argmin(ratio))
         if ratio[i] < 1.0:
             d = np.linalg.norm(starts - starts[i], axis=1)
