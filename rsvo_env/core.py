@@ -213,15 +213,12 @@ class Simulator:
         seg = s.goals[idx] - s.starts[idx]
         s.frame_angle[idx] = np.arctan2(seg[..., 1], seg[..., 0])
         s.headings[idx] = s.frame_angle[idx]  # a unicycle starts facing its goal
-        self._derive()
+        # what follows from the new positions: nearest distances and neighbours, who is at its
+        # goal and whom the right-hand rule turns
+        post_step.derive(self, idx)
         s.reached[idx] = s.at_goal[idx]
         self.metrics.reset(idx)
         self.progress.reset(idx, goal_distance(s.positions[idx], s.goals[idx]))
-
-    def _derive(self) -> None:
-        """What follows from the current positions, once per state: the nearest distance, the K
-        nearest neighbours, who is at its goal and whom the right-hand rule turns."""
-        post_step.derive(self)
 
     def set_residual(self, residual: Residual | None) -> None:
         """Residual actions by ``residual``'s rule (None: off): each action is added to the

@@ -8,6 +8,7 @@ to the centralized CBF condition (eq. ``centralized-cbf``).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -96,13 +97,13 @@ def weight_matrix(theta: ArrayLike, mode: Weighting = "asymmetric") -> NDArray[n
         return (
             np.stack([weight_matrix(t, mode) for t in raw])
             if callable(mode)
-            else (_string_weights(np.stack([check_theta(t) for t in raw]), mode))
+            else (named_weights(np.stack([check_theta(t) for t in raw]), mode))
         )
     th = check_theta(theta, name="theta")
     if callable(mode):
         w = np.array(mode(th.copy()), dtype=np.float64)
         return validate_weight_matrix(w, th.shape[0])
-    return _string_weights(th, mode)
+    return named_weights(th, mode)
 
 
 # Rows of a weight matrix computed at once: bounds the temporaries to about 32 MB.
@@ -124,12 +125,18 @@ def _unknown(mode: object) -> ValueError:
     )
 
 
-def _string_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
-    """Weights of a named mode for validated scores (..., N), a block of rows at a time so a
-    crowd of 10,000 needs the matrix and no N x N temporaries."""
+def named_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
+    """The matrices of a named mode (:func:`weight_matrix`) for scores (..., N) that are
+    already valid (a caller that checked them, as the core does at every reset), a block of
+    rows at a time so a crowd of 10,000 needs the matrix and no N x N temporaries."""
     n = th.shape[-1]
     if mode == "symmetric":
         w = np.full((*th.shape, n), 0.5)
+    elif mode == "asymmetric" and n * n <= BLOCK_ENTRIES:
+        # one block: the upper triangle and 1 - its transpose in one pass (a reset of a
+        # small env pays for each numpy call, not for the arithmetic)
+        w = pair_omega(th[..., :, None], th[..., None, :])
+        w = np.where(_upper(n), w, 1.0 - np.swapaxes(w, -1, -2))
     elif mode == "asymmetric":
         w = np.empty((*th.shape, n))
         step = max(1, BLOCK_ENTRIES // max(n, 1))
@@ -140,13 +147,21 @@ def _string_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
             b = min(a + step, n)
             w[..., a:b, :a] = 1.0 - np.swapaxes(w[..., :a, a:b], -1, -2)
             block = w[..., a:b, a:b]
-            low = np.tril(np.ones((b - a, b - a), dtype=bool), -1)
+            low = ~_upper(b - a)
             block[..., low] = 1.0 - np.swapaxes(block, -1, -2)[..., low]
     else:
         raise _unknown(mode)
     diag = np.arange(n)
     w[..., diag, diag] = 0.0
     return w
+
+
+@functools.lru_cache(maxsize=64)
+def _upper(n: int) -> NDArray[np.bool_]:
+    """(n, n): True on and above the diagonal (the entries a weight matrix computes)."""
+    mask = np.triu(np.ones((n, n), dtype=bool))
+    mask.flags.writeable = False
+    return mask
 
 
 def validate_weight_matrix(w: NDArray[np.float64], n: int) -> NDArray[np.float64]:
@@ -207,6 +222,9 @@ def smallest_weight(omega: NDArray[np.float64]) -> NDArray[np.float64] | float:
     n = omega.shape[-1]
     if n < 2:
         return np.full(omega.shape[:-2], 0.5) if omega.ndim > 2 else 0.5
+    if n * n <= BLOCK_ENTRIES:  # one block
+        out = np.where(_upper(n) & _upper(n).T, np.inf, omega).min(axis=(-2, -1))
+        return out if omega.ndim > 2 else float(out)
     out = np.full(omega.shape[:-2], np.inf)
     step = max(1, BLOCK_ENTRIES // n)
     for a in range(0, n, step):

@@ -19,6 +19,7 @@ from rsvo_env.pairs import Floor, floor_of, weight_floor
 from rsvo_env.responsibility import (
     Weighting,
     min_pair_weight,
+    named_weights,
     scored_weight,
     smallest_weight,
     symmetric_envs,
@@ -60,7 +61,10 @@ class Weights:
             # a callable weighting needs its matrix: keep every env's from now on
             self.matrix = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
         if self.matrix is not None:
-            self.matrix[idx] = weight_matrix(theta[idx], mode)
+            # the core's scores are valid: a named mode skips weight_matrix's checks
+            th = theta[idx]
+            named = not callable(mode)
+            self.matrix[idx] = named_weights(th, mode) if named else weight_matrix(th, mode)
             self.omega_min[idx] = smallest_weight(self.matrix[idx])
         else:
             self.omega_min[idx] = [min_pair_weight(theta[e], mode) for e in idx]
