@@ -219,6 +219,7 @@ class Simulator:
         s.reached[idx] = s.at_goal[idx]
         self.metrics.reset(idx)
         self.progress.reset(idx, goal_distance(s.positions[idx], s.goals[idx]))
+        s.no_progress = self.progress.steps.copy()
 
     def set_residual(self, residual: Residual | None) -> None:
         """Residual actions by ``residual``'s rule (None: off): each action is added to the
@@ -350,6 +351,7 @@ class Simulator:
             # each agent also shares its env's mean reward (the reward_team share of it)
             reward = reward + self.reward_team * (reward.mean(-1, keepdims=True) - reward)
         self.progress.tick(goal_distance(s.positions, s.goals), s.at_goal, self.safety_radius)
+        s.no_progress = self.progress.steps.copy()
         signals = self.signals(u_nominal, u, intervention, stats)
         return self.observe(), reward, terminated, truncated, signals
 

@@ -21,12 +21,20 @@ from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env import pairs
-from rsvo_env.planar import clip_norm
+from rsvo_env.planar import clip_norm, norm
 from rsvo_env.responsibility import Weighting
 from rsvo_env.solvers import exact
 
 # below this fraction of its preferred speed an agent counts as held still (it sidesteps)
 SIDESTEP = 0.05
+# near its goal, where its look-ahead passes the goal and reaches a neighbour's body, an agent
+# that has come no closer to its goal for HOLD_SECONDS prefers at most ARRIVE times its goal
+# distance per horizon tau: held for tau, as the half-planes assume, its preferred velocity then
+# ends at most one goal distance past the goal. Faster (move-to-goal's k = 2 with tau = 2 runs 4
+# goal distances), agents parked beyond the goal fill the look-ahead and an agent can orbit its
+# goal for good; an agent still closing in keeps its speed (docs/liveness.md)
+ARRIVE = 2.0
+HOLD_SECONDS = 0.3
 _OCTAGON = np.stack(
     [np.cos(np.arange(8) * np.pi / 4), np.sin(np.arange(8) * np.pi / 4)], axis=-1
 )
@@ -81,6 +89,35 @@ def _half_planes(x, v, radii, I, J, share, tau, dt):
     return A, b
 
 
+@njit(cache=True)
+def _goal_clearance(x, g, r, I, J, out):
+    """``out[i]``: the smallest gap between agent i's goal and a listed neighbour's body."""
+    out[:] = np.inf
+    for p in range(I.shape[0]):
+        i, j = I[p], J[p]
+        for a, b in ((i, j), (j, i)):
+            dx, dy = g[a, 0] - x[b, 0], g[a, 1] - x[b, 1]
+            out[a] = min(out[a], np.sqrt(dx * dx + dy * dy) - r[a] - r[b])
+
+
+def arrival_capped(
+    preferred: NDArray, positions: NDArray, goals: NDArray, radii: NDArray, tau: float,
+    I: NDArray[np.int64], J: NDArray[np.int64], held: NDArray[np.bool_] | None = None,
+) -> NDArray[np.float64]:  # fmt: skip
+    """``preferred`` (M, 2) scaled down to speed at most ``ARRIVE |goal - x| / tau`` where the
+    look-ahead ``|preferred| tau`` passes the goal by more than the gap between the goal and a
+    neighbour's body (pairs I, J; flat (M, 2) positions and goals, radii (M,)); with ``held``
+    (M,), only there."""
+    gap = np.empty(len(positions))
+    _goal_clearance(positions, goals, radii, I, J, gap)
+    speed, dist = norm(preferred), norm(goals - positions)
+    over = (speed * tau - dist > gap) & (speed * tau > ARRIVE * dist)
+    if held is not None:
+        over &= held
+    scale = np.where(over, ARRIVE * dist / (tau * np.where(over, speed, 1.0)), 1.0)
+    return preferred * scale[:, None]
+
+
 def rorca_velocities(
     positions: NDArray,
     velocities: NDArray,
@@ -94,6 +131,8 @@ def rorca_velocities(
     neighbor_dist: float | None = None,
     max_neighbors: int | None = 10,
     parked: NDArray | None = None,
+    goals: NDArray | None = None,
+    held: NDArray | None = None,
 ) -> NDArray[np.float64]:
     """Eq. ``rorca``: each agent's velocity (E, N, 2) closest to ``preferred`` within its R-ORCA
     half-planes against the nearest ``max_neighbors`` (None: all) of the neighbours within
@@ -101,7 +140,9 @@ def rorca_velocities(
     ``u_max`` (ORCA's defaults: 10 neighbours, 5 pair distances, horizon 2 s). ``radii``
     (E, N) or (N,); the weights come from the scores ``theta`` (E, N) and each env's weighting
     ``modes`` (``"symmetric"``: ORCA); ``parked`` (E, N): agents at their goals, which take at
-    least half of the avoidance from agents en route."""
+    least half of the avoidance from agents en route; ``goals`` (E, N, 2): near its goal, where
+    its look-ahead reaches a neighbour, an agent's preferred speed is capped
+    (:func:`arrival_capped`), only the agents ``held`` (E, N) if given."""
     E, n = positions.shape[:2]
     radii = np.broadcast_to(radii, (E, n))
     if neighbor_dist is None:
@@ -119,9 +160,14 @@ def rorca_velocities(
         s = np.where(park[I] & ~park[J], np.maximum(s, 0.5), s)
         s = np.where(park[J] & ~park[I], np.minimum(s, 0.5), s)
         share = np.stack([s, 1.0 - s], axis=1)
-    A, b = _half_planes(x, v, np.ascontiguousarray(radii).reshape(-1), I, J, share, float(tau),
+    r = np.ascontiguousarray(radii).reshape(-1)
+    A, b = _half_planes(x, v, r, I, J, share, float(tau),
                         float(dt))  # fmt: skip
     M = E * n
+    pref = preferred.reshape(M, 2)
+    if goals is not None:
+        hold = None if held is None else np.ascontiguousarray(held).reshape(-1)
+        pref = arrival_capped(pref, x, goals.reshape(M, 2), r, tau, I, J, hold)
     owner = np.concatenate([I, J])
     if max_neighbors is not None and len(owner):
         # ORCA's neighbour rule: each agent's nearest max_neighbors within neighbor_dist
@@ -139,7 +185,6 @@ def rorca_velocities(
     offsets[1:] = np.cumsum(np.bincount(owner, minlength=M))
     box = np.array([u_max, u_max])
     rows = (A[order], b[order], offsets, -box, box)
-    pref = preferred.reshape(M, 2)
     out = exact.solve_csr(pref, *rows)[0]
     # an agent the half-planes hold still while it wants to move (a jam that is symmetric, as
     # in a ring around a common goal) sidesteps: the velocity closest to its preferred one

@@ -49,6 +49,9 @@ class State:
     contact: NDArray[np.float64] | None = None
     # (E, N) headings (radians), for a model that has them (the unicycle)
     headings: NDArray[np.float64] | None = None
+    # (E, N) steps since each agent last came closer to its goal (the core's progress clock,
+    # rsvo_env.stall), a copy per step; R-ORCA reads it (rsvo_env.rorca.HOLD_SECONDS)
+    no_progress: NDArray[np.int64] | None = None
 
     @classmethod
     def empty(cls, num_envs: int, n: int, k: int, num_obstacles: int = 0) -> State:
@@ -68,6 +71,7 @@ class State:
             weighting=["asymmetric"] * E,
             obstacles=np.zeros((E, num_obstacles, 5)),
             headings=np.zeros((E, n)),
+            no_progress=np.zeros((E, n), dtype=np.int64),
         )
 
 

@@ -177,7 +177,7 @@ def test_a_bad_team_share_is_refused(share):
     "name, kwargs",
     [
         ("position_swap", {"deadlock_resolution": "none", "theta_range": (1.0, 10.0)}),
-        ("circular_swap", {"reward_team": 0.5}),
+        ("circular_swap", {"reward_team": 0.5, "max_steps": 150}),
         ("crowd", {"num_agents": 5, "theta_range": (1.0, 10.0), "num_obs_neighbors": 2}),
     ],
 )
@@ -186,7 +186,7 @@ def test_the_fused_after_step_equals_the_hooks_bit_for_bit(name, kwargs):
     auto-resets, exactly what the scenario's hooks called in turn give."""
     runs = []
     for fused in (True, False):
-        venv = BatchedEnv(name, num_envs=3, dt=0.1, gamma=10.0, max_steps=120, **kwargs)
+        venv = BatchedEnv(name, num_envs=3, dt=0.1, gamma=10.0, **{"max_steps": 120, **kwargs})
         assert venv.sim.fused_post_step  # the base hooks: the fused stage serves them
         venv.sim.fused_post_step = fused
         obs, _ = venv.reset(seed=5)

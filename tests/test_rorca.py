@@ -98,6 +98,53 @@ def test_a_crowd_of_100_finishes_behind_the_filter_with_no_collision(seed):
     assert reached.all(), f"{int((~reached).sum())} agents never reached their goals"
 
 
+def test_the_preferred_speed_is_capped_where_the_look_ahead_past_the_goal_reaches_a_body():
+    """Agent 0 is 1 m short of its goal at 2 m/s (a 4 m look-ahead over tau = 2 s, 3 m past the
+    goal): capped to ARRIVE goal distances per tau (1 m/s) while agent 1's body is within 3 m
+    of the goal, untouched when it is farther or agent 0 is not held; agent 1 (parked, no
+    look-ahead) never."""
+    x = np.array([[0.0, 0.0], [0.0, 0.0]])
+    g = np.array([[1.0, 0.0], [0.0, 0.0]])
+    pref = np.array([[2.0, 0.0], [0.0, 0.0]])
+    r = np.array([0.5, 0.5])
+    I, J = np.array([0]), np.array([1])
+    for where, capped in ((3.5, True), (5.2, False), (-2.5, True)):
+        x[1] = (where, 0.5)
+        gap = np.hypot(where - 1.0, 0.5) - 1.0
+        out = rorca.arrival_capped(pref, x, g, r, 2.0, I, J)
+        assert capped == (gap < 3.0)
+        expected = rorca.ARRIVE * 1.0 / 2.0 if capped else 2.0
+        np.testing.assert_allclose(out[0], [expected, 0.0], rtol=1e-15)
+        assert np.array_equal(out[1], pref[1])
+        # an agent still coming closer to its goal (not held) keeps its speed
+        not_held = np.array([False, False])
+        assert np.array_equal(rorca.arrival_capped(pref, x, g, r, 2.0, I, J, not_held), pref)
+        held = np.array([True, True])
+        assert np.array_equal(rorca.arrival_capped(pref, x, g, r, 2.0, I, J, held), out)
+    # a neighbour nowhere near: every agent keeps its preferred velocity
+    assert np.array_equal(rorca.arrival_capped(pref, x, g, r, 2.0, I[:0], J[:0]), pref)
+
+
+def test_crowds_of_100_at_the_training_dt_finish_with_no_agent_orbiting_its_goal():
+    """At dt 0.1 (the training configs' step, gamma = 10) these seeds left an agent orbiting its
+    goal at up to 2 m/s for the whole episode before the arrival cap (ARRIVE, HOLD_SECONDS):
+    R-ORCA's look-ahead over tau ran several goal distances past the goal into agents parked
+    there."""
+    seeds = [1005, 1012, 1014, 1015, 1019]
+    env = BatchedEnv("crowd", num_envs=len(seeds), num_agents=100, max_steps=1000, dt=0.1,
+                     gamma=10.0, theta_range=(1.0, 10.0))  # fmt: skip
+    env.reset(seed=seeds)
+    reached = np.zeros((len(seeds), 100), dtype=bool)
+    for _ in range(999):
+        _, _, term, trunc, info = env.step(env.nominal_actions())
+        assert info["min_distance"].min() >= 1.0 - 1e-9
+        reached |= info["at_goal"]
+        if reached.all():
+            break
+    short = {seeds[e]: int((~reached[e]).sum()) for e in range(len(seeds)) if not reached[e].all()}
+    assert not short, f"agents short of their goals after 100 s, by seed: {short}"
+
+
 def test_move_to_goal_is_kept_by_name_and_rorca_needs_velocity_inputs():
     env = rsvo_env.parallel_env("crowd", num_agents=4, nominal="move_to_goal")
     env.reset(seed=0)
