@@ -16,6 +16,13 @@ A policy trained to hold still near its goal (to let a neighbour pass) tends to 
 with nobody around too. With ``interaction_radius`` the residual of an agent en route
 acts only while another agent is closer than that: alone, an agent follows the scripted command,
 which is what an agent alone should do.
+
+A policy trained in crowds of a dozen meets jams in crowds of a hundred that it never saw, and
+its residual can hold an agent in one. With ``stall_gate`` (seconds) the residual of an agent
+that has come no closer to its goal for that long is ignored until it does again: the
+scripted controller, which is live (``docs/liveness.md``), takes the agent on, and the policy
+acts again from its next progress. The env's progress clock (``rsvo_env.stall``) is the one
+the deadlock signal reads.
 """
 
 from __future__ import annotations
@@ -35,13 +42,15 @@ class Residual:
     """The residual mode's parameters (physical units): ``gate_radius`` >= 0, ``scale`` > 0
     (1 lets a residual turn a full-speed command by up to 90 degrees, 2 also reverse it),
     ``yield_radius`` > 0 or None (no yielding), ``interaction_radius`` > 0 or None (the
-    residual of an agent en route acts whatever its neighbours' distance)."""
+    residual of an agent en route acts whatever its neighbours' distance), ``stall_gate`` > 0
+    seconds or None (the residual acts however long the agent has made no progress)."""
 
     gate_radius: float
     right_hand: bool = True
     scale: float = 1.0
     yield_radius: float | None = None
     interaction_radius: float | None = None
+    stall_gate: float | None = None
 
     def __post_init__(self) -> None:
         gate = check_real(self.gate_radius, "gate_radius")
@@ -50,7 +59,7 @@ class Residual:
         object.__setattr__(self, "gate_radius", gate)
         object.__setattr__(self, "scale", check_positive(self.scale, "residual scale"))
         object.__setattr__(self, "right_hand", check_flag(self.right_hand, "right_hand"))
-        for name in ("yield_radius", "interaction_radius"):
+        for name in ("yield_radius", "interaction_radius", "stall_gate"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, check_positive(getattr(self, name), name))
 
@@ -86,6 +95,8 @@ class Residual:
         """The controls (E, N, 2): the scripted command plus the gated residual (physical,
         world frame, norm <= u_max), held to ``u_max``."""
         on = self.open(state.positions, state.goals)
+        if self.stall_gate is not None and state.no_progress is not None:
+            on = on & (state.no_progress * scenario.params["dt"] < self.stall_gate)
         nominal = scenario.nominal(state, self.right_hand)
         gated = np.where(on[..., None], self.scale * residual, 0.0)
         return planar.clip_norm(nominal + gated, u_max)

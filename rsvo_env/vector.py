@@ -58,8 +58,8 @@ class BatchedEnv:
     there is no ``final_obs``. An env's episodes are the same in both modes.
 
     ``action="residual"`` adds each action to the scripted nominal command (``gate_radius``,
-    ``residual_right_hand``, ``residual_scale``, ``yield_radius``, ``interaction_radius``: see
-    :class:`rsvo_env.residual.Residual`).
+    ``residual_right_hand``, ``residual_scale``, ``yield_radius``, ``interaction_radius``,
+    ``stall_gate``: see :class:`rsvo_env.residual.Residual`).
 
     Reset options (``theta``, (N,) or (E, N), and ``weighting``) hold for the auto-resets that
     follow, until the next ``reset``. Every keyword of ``RSVOParallelEnv`` and of the scenario
@@ -80,6 +80,7 @@ class BatchedEnv:
         residual_scale: float = 1.0,
         yield_radius: float | None = None,
         interaction_radius: float | None = None,
+        stall_gate: float | None = None,
         autoreset_mode: str = "same_step",
         **kwargs: Any,
     ) -> None:
@@ -95,8 +96,9 @@ class BatchedEnv:
         self.autoreset_mode = autoreset_mode
         # checked whatever the action mode: a bad value is refused, not ignored
         residual = Residual(
-            gate_radius, residual_right_hand, residual_scale, yield_radius, interaction_radius
-        )
+            gate_radius, residual_right_hand, residual_scale, yield_radius, interaction_radius,
+            stall_gate,
+        )  # fmt: skip
         self.sim = make_simulator(scenario, num_envs=num_envs, **kwargs)
         self.scenario = self.sim.scenario
         if safety_filter:

@@ -233,7 +233,7 @@ def test_a_parked_agent_steps_aside_only_when_it_may_yield(yield_radius, moves):
 
 
 @pytest.mark.parametrize("value", [0.0, -1.0, float("nan"), float("inf"), "1", True, 1j])
-@pytest.mark.parametrize("name", ["yield_radius", "interaction_radius"])
+@pytest.mark.parametrize("name", ["yield_radius", "interaction_radius", "stall_gate"])
 def test_a_bad_yield_or_interaction_radius_is_refused(value, name):
     with pytest.raises(ValueError, match=name):
         BatchedEnv("crowd", num_agents=3, action="residual", **{name: value})
@@ -251,3 +251,27 @@ def test_yielding_never_reopens_an_agent_en_route():
     # one of them parked: it may yield to the other, which stays alone
     goals[0, 0] = positions[0, 0]
     assert residual.open(positions, goals).tolist() == [[True, False]]
+
+
+@pytest.mark.parametrize("stall_gate", [None, 1.0])
+def test_a_stalled_agent_follows_the_script_with_a_stall_gate(stall_gate):
+    """Two agents far apart, each held still by a residual straight against its scripted
+    command: with a stall gate of 1 s, an agent whose progress clock has reached 1 s takes the
+    scripted step (its residual ignored), which is progress, so the policy acts again; without
+    one the agents stay held."""
+    venv = BatchedEnv("position_swap", action="residual", safety_filter=False, dt=0.1,
+                      deadlock_resolution="none", stall_gate=stall_gate)  # fmt: skip
+    venv.reset(seed=0)
+    s = venv.sim.state
+    scripted = 0
+    for _ in range(40):
+        toward = s.goals - s.positions
+        toward /= np.linalg.norm(toward, axis=-1, keepdims=True)
+        gated = s.no_progress * 0.1 >= (np.inf if stall_gate is None else stall_gate)
+        before = s.positions.copy()
+        venv.step(-toward)  # cancels the full-speed scripted command (scale 1)
+        step = np.linalg.norm(s.positions - before, axis=-1)
+        assert np.array_equal(step > 1e-9, gated)  # moved exactly when the gate closed
+        assert (s.no_progress[gated] == 0).all()
+        scripted += int(gated.sum())
+    assert (scripted > 0) == (stall_gate is not None)

@@ -33,6 +33,7 @@ TOP: dict[str, schema.Check] = {
     "residual_scale": schema.real(positive=True),
     "yield_radius": schema.optional(schema.real(positive=True)),
     "interaction_radius": schema.optional(schema.real(positive=True)),
+    "stall_gate": schema.optional(schema.real(positive=True)),
     "weighting": schema.choice(WEIGHTINGS),
     "num_envs": schema.integer(1),
     "timesteps": schema.integer(1),
@@ -147,15 +148,16 @@ def hyperparameters(cfg: dict[str, Any]) -> dict[str, Any]:
     return hyper
 
 
-def residual_settings(cfg: dict[str, Any]) -> tuple[float, bool, float, float | None, float | None]:
+def residual_settings(cfg: dict[str, Any]) -> tuple[float, bool, float, Any, Any, Any]:
     """A config's residual mode, the env's defaults where it is silent: gate radius, right-hand
-    rule, scale, yield radius, interaction radius."""
+    rule, scale, yield radius, interaction radius, stall gate."""
     return (
         cfg.get("gate_radius", 0.5),
         cfg.get("residual_right_hand", True),
         cfg.get("residual_scale", 1.0),
         cfg.get("yield_radius"),
         cfg.get("interaction_radius"),
+        cfg.get("stall_gate"),
     )
 
 
@@ -168,7 +170,7 @@ def make_env(
 ) -> BatchedEnv:
     """The filtered batched env a config describes (``action``/``weighting``: another choice,
     e.g. ``action="direct"`` for the scripted controller under the same protocol)."""
-    gate, right_hand, scale, yield_radius, interaction_radius = residual_settings(cfg)
+    gate, right_hand, scale, yield_radius, interaction_radius, stall = residual_settings(cfg)
     return BatchedEnv(
         cfg["scenario"],
         num_envs=num_envs,
@@ -178,6 +180,7 @@ def make_env(
         residual_scale=scale,
         yield_radius=yield_radius,
         interaction_radius=interaction_radius,
+        stall_gate=stall,
         weighting=weighting or cfg["weighting"],
         **{**cfg["env"], **env_overrides},
     )

@@ -29,7 +29,9 @@ class ResidualAction(BaseParallelWrapper):
     command, 1 only turn it); ``yield_radius``: with it, a parked agent's residual acts again
     while a neighbour still en route is closer than this (physical units), so it may step aside;
     ``interaction_radius``: with it, the residual of an agent en route acts only while another
-    agent is closer than this (:class:`rsvo_env.residual.Residual`)."""
+    agent is closer than this; ``stall_gate``: with it, the residual of an agent that has come no
+    closer to its goal for this many seconds is ignored until it does again
+    (:class:`rsvo_env.residual.Residual`)."""
 
     def __init__(
         self,
@@ -39,9 +41,11 @@ class ResidualAction(BaseParallelWrapper):
         scale: float = 1.0,
         yield_radius: float | None = None,
         interaction_radius: float | None = None,
+        stall_gate: float | None = None,
     ) -> None:
         super().__init__(env)
         radii = (yield_radius, interaction_radius)
-        env.unwrapped.set_residual(Residual(gate_radius, right_hand, scale, *radii))
+        env.unwrapped.set_residual(Residual(gate_radius, right_hand, scale, *radii, stall_gate))
         self.gate_radius, self.right_hand, self.scale = gate_radius, right_hand, scale
         self.yield_radius, self.interaction_radius = radii
+        self.stall_gate = stall_gate
