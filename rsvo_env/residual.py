@@ -89,14 +89,20 @@ class Residual:
             opened[j[close & flat[i] & ~flat[j]]] = True
         return opened.reshape(en_route.shape)
 
+    def acting(self, scenario: Any, state: Any) -> NDArray[np.bool_]:
+        """(E, N): whose residual acts this step, :meth:`open` and, with ``stall_gate``, not
+        stalled for that long."""
+        on = self.open(state.positions, state.goals)
+        if self.stall_gate is not None and state.no_progress is not None:
+            on = on & (state.no_progress * scenario.params["dt"] < self.stall_gate)
+        return on
+
     def controls(
         self, scenario: Any, state: Any, residual: NDArray[np.float64], u_max: float
     ) -> NDArray[np.float64]:
         """The controls (E, N, 2): the scripted command plus the gated residual (physical,
         world frame, norm <= u_max), held to ``u_max``."""
-        on = self.open(state.positions, state.goals)
-        if self.stall_gate is not None and state.no_progress is not None:
-            on = on & (state.no_progress * scenario.params["dt"] < self.stall_gate)
+        on = self.acting(scenario, state)
         nominal = scenario.nominal(state, self.right_hand)
         gated = np.where(on[..., None], self.scale * residual, 0.0)
         return planar.clip_norm(nominal + gated, u_max)

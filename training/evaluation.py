@@ -89,7 +89,14 @@ def run_episodes(
     out = {k: np.zeros(E) for k in FIELDS}
     returns, effort, touched = np.zeros((E, N)), np.zeros((E, N)), np.zeros((E, N))
     finished = np.zeros(E, dtype=bool)
+    residual = env.sim.residual
+    # agent-steps short of the goal, and those in which the policy's residual acted
+    en_route, acted = np.zeros(E), np.zeros(E)
     while not finished.all():
+        if residual is not None:
+            short = ~env.sim.state.reached
+            en_route += short.sum(axis=1) * ~finished
+            acted += (residual.acting(env.scenario, env.sim.state) & short).sum(axis=1) * ~finished
         obs, reward, _, _, info = env.step(policy(obs, env))
         live = ~finished
         returns[live] += reward[live]
@@ -111,6 +118,8 @@ def run_episodes(
             out["arrived"][ended] = info["episode_arrived"][ended] / N
             finished |= ended
     out["safety_radius"] = np.full(E, env.scenario.params["safety_radius"])
+    if residual is not None:
+        out["residual_share"] = acted / np.maximum(en_route, 1)
     return out
 
 
@@ -129,6 +138,12 @@ def summarize(records: dict[str, NDArray]) -> dict[str, float]:
         "return": float(records["return"].mean()),
         "intervention": float(records["intervention"].mean()),
         "intervention_rate": float(records["intervention_rate"].mean()),
+        # residual actions: the share of agent-steps short of the goal in which the residual acted
+        **(
+            {"residual_share": float(records["residual_share"].mean())}
+            if "residual_share" in records
+            else {}
+        ),
     }
 
 
