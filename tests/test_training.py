@@ -177,6 +177,30 @@ def test_zero_residual_is_the_scripted_controller_on_the_same_seeds():
     assert not np.array_equal(b["min_distance"], c["min_distance"])  # other seeds, other episodes
 
 
+@pytest.mark.parametrize("stall_gate", [None, 0.5])
+def test_the_residual_share_counts_the_agent_steps_in_which_the_residual_acted(stall_gate):
+    """A policy that holds every agent still (a residual against the scripted command): with no
+    stall gate its residual acts in every agent-step en route (the circular config's gates open
+    far from the goal); with a stall gate of 0.5 s it is gated off once an agent stalls, so the
+    share falls. A direct-action run has no residual and no share."""
+    cfg = configs.resolve(configs.load("circular_swap"))
+    cfg = {**cfg, "stall_gate": stall_gate, "env": {**cfg["env"], "max_steps": 40}}
+    cfg["validation"] = {**cfg.get("validation", {}), "max_steps": 40}
+
+    def against(obs, env):
+        s = env.sim.state
+        toward = s.goals - s.positions
+        toward /= np.linalg.norm(toward, axis=-1, keepdims=True)
+        return env.sim.to_actions(-toward * env.scenario.u_max)
+
+    share = run_episodes(cfg, against, 2, seed=3)["residual_share"]
+    if stall_gate is None:
+        assert np.array_equal(share, [1.0, 1.0])
+    else:
+        assert (share > 0.0).all() and (share < 0.9).all()
+    assert "residual_share" not in run_episodes(cfg, scripted_policy, 1, seed=3, action="direct")
+
+
 def test_readme_states_the_circular_config_as_it_is():
     """README's training section describes the shipped config; hold it to the YAML."""
     from pathlib import Path
