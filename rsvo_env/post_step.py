@@ -41,19 +41,18 @@ def derive(sim: Simulator, envs: NDArray[np.int64] | None = None) -> None:
     """The derived state of the current positions, through the scenario's hooks; with ``envs``
     (the envs a reset moved) only theirs where the hooks are the base ones."""
     s = sim.state
-    if envs is not None and sim.fused_post_step and len(envs) < len(s.nearest):
-        x = s.positions[envs]
-        d, idx = nearest_neighbors(x, max(sim.k, 1))
+    part = envs is not None and sim.fused_post_step and len(envs) < len(s.nearest)
+    pick = envs if part else slice(None)
+    x = s.positions[pick]
+    d, idx = nearest_neighbors(x, max(sim.k, 1))
+    derived = (d[..., 0], idx[..., : sim.k], sim.scenario.at_goal(x, s.goals[pick]))
+    if part:
         # new arrays, not writes into the old: the last step's infos hold those
-        s.nearest, s.neighbors, s.at_goal = s.nearest.copy(), s.neighbors.copy(), s.at_goal.copy()
-        s.nearest[envs], s.neighbors[envs] = d[..., 0], idx[..., : sim.k]
-        s.at_goal[envs] = sim.scenario.at_goal(x, s.goals[envs])
-        s.rh_active = sim.scenario.right_hand_active(s)
-        return
-    d, idx = nearest_neighbors(s.positions, max(sim.k, 1))
-    s.nearest = d[..., 0]
-    s.neighbors = idx[..., : sim.k]
-    s.at_goal = sim.scenario.at_goal(s.positions, s.goals)
+        fresh = [old.copy() for old in (s.nearest, s.neighbors, s.at_goal)]
+        for whole, new in zip(fresh, derived, strict=True):
+            whole[pick] = new
+        derived = tuple(fresh)
+    s.nearest, s.neighbors, s.at_goal = derived
     s.rh_active = sim.scenario.right_hand_active(s)
     if not sim.plain:
         s.contact = contact(s.positions, sim.radii, s.obstacles)

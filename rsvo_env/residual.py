@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env import grid, planar
+from rsvo_env import grid, planar, stall
 from rsvo_env.validation import check_flag, check_positive, check_real
 
 
@@ -93,8 +93,10 @@ class Residual:
         """(E, N): whose residual acts this step, :meth:`open` and, with ``stall_gate``, not
         stalled for that long."""
         on = self.open(state.positions, state.goals)
-        if self.stall_gate is not None and state.no_progress is not None:
-            on = on & (state.no_progress * scenario.params["dt"] < self.stall_gate)
+        if self.stall_gate is not None:
+            stalled = stall.held(state.no_progress, scenario.params["dt"], self.stall_gate)
+            if stalled is not None:
+                on = on & ~stalled
         return on
 
     def controls(

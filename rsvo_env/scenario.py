@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env import dynamics, nominal, rorca
+from rsvo_env import dynamics, nominal, rorca, stall
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.obstacles import Obstacles
 from rsvo_env.planar import within
@@ -264,8 +264,7 @@ class Scenario:
             state.positions, state.velocities, preferred, p["rorca_pad"] * self.radii,
             state.theta, state.weighting, self.u_max, p["dt"], p["rorca_tau"],
             parked=state.at_goal, goals=state.goals,
-            held=None if state.no_progress is None
-            else state.no_progress * p["dt"] >= rorca.HOLD_SECONDS,
+            held=stall.held(state.no_progress, p["dt"], rorca.HOLD_SECONDS),
         )  # fmt: skip
 
     def move_to_goal(self, state: Any, right_hand: bool, speed: float) -> NDArray[np.float64]:

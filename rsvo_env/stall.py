@@ -87,3 +87,9 @@ def _tick(distance, at_goal, margin, best, steps):
 def goal_distance(positions: NDArray[np.float64], goals: NDArray[np.float64]) -> NDArray:
     """Each agent's distance to its goal, (..., N)."""
     return planar.norm(goals - positions)
+
+
+def held(no_progress: NDArray[np.int64] | None, dt: float, seconds: float) -> NDArray | None:
+    """(E, N): the agents that have come no closer to their goals for ``seconds`` or more, read
+    from the state's ``no_progress`` (steps of ``dt``); None where the state carries no clock."""
+    return None if no_progress is None else no_progress * dt >= seconds
