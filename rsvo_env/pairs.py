@@ -19,7 +19,6 @@ from rsvo_env.neighbors import DENSE_MAX_AGENTS, env_offsets
 from rsvo_env.responsibility import (
     Weighting,
     pair_omega,
-    scored_weight,
     symmetric_envs,
     weight_matrix,
 )
@@ -283,6 +282,49 @@ def omega_pairs(omega, I, J, n):
     return w
 
 
+@njit(cache=True)
+def _shares(theta, I, J):
+    """``theta_I / (theta_I + theta_J)`` of flat pairs, exactly as ``responsibility._share``
+    computes it (both halved where the sum overflows; 0.5 where both are 0)."""
+    P = I.shape[0]
+    out = np.empty(P)
+    for p in range(P):
+        ti, tj = theta[I[p]], theta[J[p]]
+        total = ti + tj
+        if not np.isfinite(total):
+            ti, tj = 0.5 * ti, 0.5 * tj
+            total = ti + tj
+        out[p] = ti / total if total > 0.0 else 0.5
+    return out
+
+
+@njit(cache=True)
+def _both_sides(cos_pi_share, symmetric, I, n):
+    """(P, 2): ``omega = (1 + cos(pi share)) / 2`` of each pair and ``1 - omega``; 1/2 in the
+    envs marked ``symmetric`` (E,)."""
+    P = I.shape[0]
+    out = np.empty((P, 2))
+    for p in range(P):
+        w = 0.5 if symmetric[I[p] // n] else 0.5 * (1.0 + cos_pi_share[p])
+        out[p, 0] = w
+        out[p, 1] = 1.0 - w
+    return out
+
+
+def scored_pairs(
+    theta: NDArray, I: NDArray, J: NDArray, symmetric: NDArray[np.bool_] | None = None
+) -> NDArray[np.float64]:
+    """(P, 2) omega_IJ, omega_JI of flat pairs from validated scores (E, N) (Thm. 1: the
+    weight matrix's entries, ``pair_omega`` above the diagonal), the same numbers as
+    :func:`responsibility.scored_weight` in two compiled passes and numpy's cosine;
+    ``symmetric`` (E,): envs whose weighting is symmetric (1/2 each)."""
+    E, n = theta.shape
+    if symmetric is None:
+        symmetric = np.zeros(E, dtype=bool)
+    share = _shares(np.ascontiguousarray(theta, dtype=np.float64).reshape(-1), I, J)
+    return _both_sides(np.cos(np.pi * share), symmetric, I, n)
+
+
 def weights_of(
     theta: NDArray, modes: Sequence[Weighting], I: NDArray, J: NDArray
 ) -> NDArray[np.float64]:
@@ -292,6 +334,4 @@ def weights_of(
     if any(callable(m) for m in modes):
         W = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
         return omega_pairs(W.reshape(E * n, n), I, J, n)
-    th = theta.reshape(-1)
-    w = scored_weight(th[I], th[J], symmetric_envs(modes)[I // n])
-    return np.stack([w, 1.0 - w], axis=1)
+    return scored_pairs(theta, I, J, symmetric_envs(modes))

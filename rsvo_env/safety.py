@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rsvo_env import barriers, pairs, solvers
+from rsvo_env import pairs, scene_barrier, solvers
 from rsvo_env.bodies import Bodies
 from rsvo_env.dynamics.unicycle import rotate_rows
 from rsvo_env.filter_config import FilterConfig
@@ -29,12 +29,11 @@ from rsvo_env.filter_inputs import (
     check_obstacles,
 )
 from rsvo_env.filter_result import FilterResult, per_env
-from rsvo_env.neighbors import DENSE_MAX_AGENTS, nearest_distance
+from rsvo_env.neighbors import DENSE_MAX_AGENTS
 from rsvo_env.obstacles import Obstacles
 from rsvo_env.planar import norm
 from rsvo_env.responsibility import (
     min_pair_weight,
-    pair_omega,
     smallest_weight,
     validate_weight_matrix,
     weight_matrix,
@@ -54,6 +53,8 @@ class SafetyFilter:
         # gave for them (a simulator calls with the same scores step after step)
         self._kept: dict[str, tuple[NDArray, Any]] = {}
         self._default_bodies: dict[tuple[int, int], Bodies] = {}
+        # the last culling radii: (floor, bodies, radii, reach), see _culling_radii
+        self._radii: tuple[pairs.Floor, Bodies, NDArray, NDArray] | None = None
 
     def pair_radius(
         self,
@@ -110,9 +111,7 @@ class SafetyFilter:
             return pairs.omega_pairs(np.ascontiguousarray(omega).reshape(-1, n), I, J, n)
         if mode == "symmetric":
             return np.full((len(I), 2), 0.5)
-        th = theta.reshape(-1)
-        w = pair_omega(th[I], th[J])
-        return np.stack([w, 1.0 - w], axis=1)
+        return pairs.scored_pairs(theta.reshape(-1, n), I, J)
 
     def filter(
         self,
@@ -254,9 +253,8 @@ class SafetyFilter:
         elif cfg.neighbor_radius is None:
             if floor is None:
                 floor = self._floor(theta, omega)
-            radii = cfg.model.culling_radii(cfg, floor[0], velocities, bodies)
+            radii, reach = self._culling_radii(floor, velocities, bodies)
             I, J = pairs.pairs_within_agent_radii(positions, radii, floor)
-            reach = np.where(radii > 0, radii, np.inf).min(axis=(1, 2))
         else:
             radius = self.pair_radius(theta, omega, omega_min, bodies)
             I, J = pairs.candidate_pairs(positions, radius)
@@ -278,13 +276,32 @@ class SafetyFilter:
             feasible=feasible.reshape(E, n),
             intervention=norm(actions - nom).reshape(E, n),
             active=active.reshape(E, n),
-            min_h=self._min_h(rows, positions, I, dense, bodies, nearest, reach, obstacle_h),
+            min_h=scene_barrier.min_h(
+                rows, positions, I, dense, bodies, cfg.model, nearest, reach, obstacle_h
+            ),
             max_violation=violation.reshape(E, n),
             n_rows=rows.counts.reshape(E, n),
             n_unrecoverable_pairs=per_env(env_of_row, rows.flat_unrecoverable, E) // 2,
             n_capped_shares=per_env(env_of_row, rows.flat_capped, E),
             kept_rows=rows,
         )
+
+    def _culling_radii(
+        self, floor: pairs.Floor, velocities: NDArray | None, bodies: Bodies
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Each agent's search radius per score group (E, N, K) and each scene's smallest (E,).
+        Radii that do not depend on the state (models without velocities) are kept for the
+        floor and bodies they came from: a simulator steps with the same ones, step after step."""
+        cfg = self.config
+        kept = self._radii
+        state_free = not cfg.model.needs_velocities
+        if state_free and kept is not None and kept[0] is floor and kept[1] is bodies:
+            return kept[2], kept[3]
+        radii = cfg.model.culling_radii(cfg, floor[0], velocities, bodies)
+        reach = np.where(radii > 0, radii, np.inf).min(axis=(1, 2))
+        if state_free:
+            self._radii = (floor, bodies, radii, reach)
+        return radii, reach
 
     def _floor(self, theta: NDArray, omega: NDArray | None) -> pairs.Floor:
         """:func:`pairs.weight_floor` of the weights in force, from the scores alone (O(N)
@@ -337,59 +354,3 @@ class SafetyFilter:
             n_unrecoverable_pairs=zeros,
             n_capped_shares=zeros,
         )
-
-    def _min_h(
-        self,
-        rows: barriers.Rows,
-        positions: NDArray,
-        I: NDArray,
-        dense: bool,
-        bodies: Bodies,
-        nearest: NDArray | None = None,
-        reach: NDArray | None = None,
-        obstacle_h: NDArray | None = None,
-    ) -> NDArray[np.float64]:
-        """(E,) smallest barrier value of each scene over the pairs examined; for the single
-        integrator beyond the dense size, over all pairs (the nearest pair may lie outside the
-        pair search). ``reach`` (E,): the smallest positive search radius of each scene; every
-        pair closer than it was examined, so a closer examined pair is the scene's nearest.
-        ``obstacle_h`` (E * N,): each agent's smallest barrier value against the obstacles,
-        which the scene's value also covers."""
-        E, n = positions.shape[:2]
-        if obstacle_h is not None:
-            h = self._min_h(rows, positions, I, dense, bodies, nearest, reach)
-            return np.minimum(h, obstacle_h.reshape(E, n).min(axis=-1))
-        if dense:
-            if n < 2:
-                return np.full(E, np.inf)
-            return rows.pair_h.reshape(E, -1).min(axis=-1)
-        out = np.full(E, np.inf)
-        if len(I):
-            # pairs come sorted by I, so each env's pairs are one run
-            env = I // n
-            starts = np.flatnonzero(np.r_[True, env[1:] != env[:-1]])
-            out[env[starts]] = np.minimum.reduceat(rows.pair_h, starts)
-        if self.config.model.barrier_over_all_pairs():
-            # no pair beyond the reach has a smaller barrier than reach^2 - (2 r_max)^2
-            R2 = (2.0 * bodies.r_max) ** 2
-            if nearest is None and reach is not None and np.all(out <= reach**2 - R2):
-                return out
-            if bodies.uniform:
-                d = (nearest_distance(positions) if nearest is None else nearest).min(axis=-1)
-                return np.minimum(out, d**2 - R2)
-            return np.minimum(out, nearest_barrier(positions, bodies))
-        return out
-
-
-def nearest_barrier(positions: NDArray, bodies: Bodies) -> NDArray[np.float64]:
-    """(E,) the smallest ``|x_i - x_j|^2 - (r_i + r_j)^2`` of each scene over all pairs: the
-    pairs within the nearest distance plus twice the largest radius hold it."""
-    E, n = positions.shape[:2]
-    d = nearest_distance(positions).min(axis=-1)
-    reach = float((d + 2.0 * bodies.r_max).max())
-    I, J = pairs.candidate_pairs(positions, reach)
-    out = np.full(E, np.inf)
-    flat = positions.reshape(-1, 2)
-    h = ((flat[I] - flat[J]) ** 2).sum(axis=-1) - bodies.pair_distance(I, J) ** 2
-    np.minimum.at(out, I // n, h)
-    return out

@@ -99,3 +99,25 @@ def test_extreme_personalities_cost_their_own_rows_only(monkeypatch):
     assert got_pairs <= 2 * base_pairs + 2 * (n - 1), (got_pairs, base_pairs)
     assert got_bytes <= 2 * base_bytes, (got_bytes, base_bytes)
     assert res.feasible.all()
+
+
+def test_a_reused_filter_searches_with_the_radii_of_the_scores_and_bodies_in_force():
+    """The search radii are kept from call to call while the scores and bodies stay; new ones
+    give new radii. An altruist 10 m behind an egoist it runs toward must slow down (its row
+    binds from about 28 m against theta 10 : 1), which a filter still searching with the radii
+    of equal scores (1.7 m) would miss."""
+    grid = np.stack(np.meshgrid(np.arange(20.0), np.arange(20.0)), -1).reshape(-1, 2) * 5.0
+    x = np.concatenate([grid, [[200.0, 0.0], [210.0, 0.0]]])  # 402 agents: the per-agent search
+    nominal = np.zeros_like(x)
+    nominal[-2] = (2.0, 0.0)  # the altruist heads for the egoist
+    flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0))
+    equal = np.ones(len(x))
+    spread = equal.copy()
+    spread[-2] = 10.0
+    for theta, radii in [(equal, None), (spread, None), (spread, np.full(len(x), 0.6)),
+                         (equal, None), (spread, None)]:  # fmt: skip
+        got = flt.filter(x, nominal, theta, radii=radii).actions
+        want = SafetyFilter(flt.config).filter(x, nominal, theta, radii=radii).actions
+        np.testing.assert_array_equal(got, want)
+        slows = theta[-2] == 10.0
+        assert (got[-2, 0] < 1.9) == slows, (theta[-2], radii is None, got[-2])

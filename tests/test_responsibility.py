@@ -117,3 +117,28 @@ def test_equal_scores_give_one_half_at_any_magnitude(t):
     assert responsibility_weight(1e308, 1e307) + responsibility_weight(1e307, 1e308) == (
         pytest.approx(1.0, abs=1e-15)
     )
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(2, 30),
+    st.floats(-300.0, 308.0),  # log10 of the scores' scale, up to sums that overflow
+    st.floats(0.0, 0.5),  # share of theta = 0 agents
+)
+def test_pair_weights_from_scores_are_the_weight_matrix_entries(seed, n, scale, zeros):
+    """The compiled pair weights (``pairs.scored_pairs``, the filter's large-N path) are the
+    weight matrix's entries bit for bit, in every env's weighting, at any scale of scores."""
+    from rsvo_env import pairs
+
+    rng = np.random.default_rng(seed)
+    theta = rng.uniform(0.0, 1.0, (3, n)) * 10.0**scale
+    theta[rng.random((3, n)) < zeros] = 0.0
+    theta[1, 1] = theta[1, 0]  # equal scores give exactly 1/2
+    theta[2, :2] = 1.5e308, 1.7e308  # a sum that overflows
+    I, J = pairs.all_pairs(n, 3)
+    modes = ["asymmetric", "symmetric", "asymmetric"]
+    got = pairs.weights_of(theta, modes, I, J)
+    W = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
+    want = pairs.omega_pairs(W.reshape(3 * n, n), I, J, n)
+    np.testing.assert_array_equal(got, want)
