@@ -304,8 +304,11 @@ def _both_sides(cos_pi_share, symmetric, I, n):
     envs marked ``symmetric`` (E,)."""
     P = I.shape[0]
     out = np.empty((P, 2))
+    mixed = symmetric.any()  # else no pair needs its env (an integer division a pair)
     for p in range(P):
-        w = 0.5 if symmetric[I[p] // n] else 0.5 * (1.0 + cos_pi_share[p])
+        w = 0.5 * (1.0 + cos_pi_share[p])
+        if mixed and symmetric[I[p] // n]:
+            w = 0.5
         out[p, 0] = w
         out[p, 1] = 1.0 - w
     return out
@@ -322,7 +325,8 @@ def scored_pairs(
     if symmetric is None:
         symmetric = np.zeros(E, dtype=bool)
     share = _shares(np.ascontiguousarray(theta, dtype=np.float64).reshape(-1), I, J)
-    return _both_sides(np.cos(np.pi * share), symmetric, I, n)
+    share *= np.pi
+    return _both_sides(np.cos(share, out=share), symmetric, I, n)
 
 
 def weights_of(
