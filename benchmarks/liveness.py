@@ -46,6 +46,7 @@ from rsvo_env.vector import BatchedEnv
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 GAMMA = 20.0  # gamma dt = 1, as the training configs run the crowd
+ROTATIONS = 10  # circular swaps, each turned by a random angle
 
 
 def ours(n: int, seed: int, cap: int, scenario: str = "crowd", **kw) -> dict:
@@ -126,10 +127,36 @@ def circular(sizes, cap) -> list[dict]:
             out[weighting] = r
             out[weighting + "_ego"] = float(r["arrival"][egoist].mean())
             out[weighting + "_alt"] = float(r["arrival"][~egoist].mean())
+            out[weighting + "_rotated"] = rotated(n, theta, radius, weighting, cap)
         rows.append({"n": n, **out})
         print("circular", n, out["asymmetric"]["makespan"], out["symmetric"]["makespan"],
               flush=True)  # fmt: skip
     return rows
+
+
+def rotated(n: int, theta: list, radius: float, weighting: str, cap: int) -> dict:
+    """The circular swap in ``ROTATIONS`` envs, each circle turned by a random angle (the
+    envs' generators, seed 0): the mean makespan and the mean arrival step of the egoists and
+    of the altruists over every rotation (a single layout's order of arrival can turn on a
+    tie, its symmetry broken by rounding)."""
+    env = BatchedEnv("circular_swap", num_envs=ROTATIONS, safety_filter=True, num_agents=n,
+                     max_steps=cap, dt=0.01, theta=theta, circle_radius=radius,
+                     weighting=weighting, random_rotation=True)  # fmt: skip
+    env.reset(seed=0)
+    arrival = np.full((ROTATIONS, n), -1)  # first arrivals: an env that ends starts anew
+    closest = np.inf
+    for step in range(1, cap + 1):
+        _, _, _, trunc, info = env.step(env.nominal_actions())
+        closest = min(closest, float(info["min_distance"].min()))
+        arrival = np.where((arrival < 0) & info["at_goal"], step, arrival)
+        if (arrival >= 0).all() or trunc.any():
+            break
+    egoist = np.array(theta) < max(theta)
+    done = (arrival >= 0).all(axis=1)  # the means are over the layouts that finished
+    kept = arrival[done]
+    return {"finished": int(done.sum()), "makespan": float(kept.max(axis=1).mean()),
+            "ego": float(kept[:, egoist].mean()), "alt": float(kept[:, ~egoist].mean()),
+            "closest": closest}  # fmt: skip
 
 
 def learned(run: Path) -> list[str]:

@@ -20,19 +20,28 @@ def circular_section(circ: list) -> list[str]:
         "For the 6-agent game the paper's controller (move-to-goal with the right-hand rule,"
         " `rsvo reproduce`) completes in 610 (symmetric) and 489 (asymmetric) steps; the paper"
         " reports 620 and 415. Egoists first: the mean arrival step of the egoists (theta 1)"
-        " against the altruists (theta 2).",
+        " against the altruists (theta 2). The same over 10 layouts, each circle turned by a"
+        " random angle (`random_rotation`, seed 0): the means over every rotation (the order of"
+        " arrival in one layout can turn on a tie that rounding breaks). Closest pair: over every"
+        " run of the row.",
         "",
         "| N | makespan, asymmetric | makespan, symmetric | egoists / altruists, asymmetric |"
-        " egoists / altruists, symmetric | closest pair [m] |",
-        "|---|---|---|---|---|---|",
+        " egoists / altruists, symmetric | 10 rotations: makespan, asymmetric / symmetric |"
+        " 10 rotations: egoists / altruists, asymmetric | closest pair [m] |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for c in circ:
         a, s = c["asymmetric"], c["symmetric"]
+        ra, rs = c["asymmetric_rotated"], c["symmetric_rotated"]
+        finished = "" if ra["finished"] == rs["finished"] == 10 else (
+            f" ({ra['finished']} / {rs['finished']} of 10 finished)")  # fmt: skip
         lines.append(
             f"| {c['n']} | {a['makespan'] or '-'} | {s['makespan'] or '-'} | "
             f"{c['asymmetric_ego']:.0f} / {c['asymmetric_alt']:.0f} | "
             f"{c['symmetric_ego']:.0f} / {c['symmetric_alt']:.0f} | "
-            f"{min(a['closest'], s['closest']):.4f} |"
+            f"{ra['makespan']:.0f} / {rs['makespan']:.0f}{finished} | "
+            f"{ra['ego']:.0f} / {ra['alt']:.0f} | "
+            f"{min(a['closest'], s['closest'], ra['closest'], rs['closest']):.4f} |"
         )
     return lines
 
