@@ -12,6 +12,7 @@ import functools
 from collections.abc import Callable, Sequence
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env.validation import check_theta
@@ -125,6 +126,58 @@ def _unknown(mode: object) -> ValueError:
     )
 
 
+@njit(cache=True)
+def _upper_shares(th):
+    """(K, N, N): ``theta_i / (theta_i + theta_j)`` above the diagonal of each of K envs'
+    scores (K, N), as :func:`_share` computes it; 0 elsewhere."""
+    K, n = th.shape
+    out = np.zeros((K, n, n))
+    for e in range(K):
+        for i in range(n):
+            for j in range(i + 1, n):
+                ti, tj = th[e, i], th[e, j]
+                total = ti + tj
+                if not np.isfinite(total):
+                    ti, tj = 0.5 * ti, 0.5 * tj
+                    total = ti + tj
+                out[e, i, j] = ti / total if total > 0.0 else 0.5
+    return out
+
+
+@njit(cache=True)
+def _from_upper_cosines(c):
+    """Weight matrices (K, N, N) from ``cos(pi share)`` above the diagonal: ``(1 + c) / 2``
+    there, ``1 -`` its transpose below, 0 on the diagonal; and each matrix's smallest
+    off-diagonal weight (K,)."""
+    K, n = c.shape[0], c.shape[1]
+    w = np.empty((K, n, n))
+    smallest = np.full(K, np.inf)
+    for e in range(K):
+        for i in range(n):
+            w[e, i, i] = 0.0
+            for j in range(i + 1, n):
+                up = 0.5 * (1.0 + c[e, i, j])
+                w[e, i, j] = up
+                w[e, j, i] = 1.0 - up
+                smallest[e] = min(smallest[e], up, 1.0 - up)
+    return w, smallest
+
+
+def named_weights_and_floor(
+    th: NDArray[np.float64], mode: str
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`named_weights` of scores (K, N), and each matrix's smallest off-diagonal weight
+    (:func:`smallest_weight`, K): for small envs in two compiled passes and numpy's cosine
+    (the same numbers, bit for bit; a reset pays for calls, not for arithmetic)."""
+    n = th.shape[-1]
+    if mode != "asymmetric" or n < 2 or th.ndim != 2 or th.shape[0] * n * n > BLOCK_ENTRIES:
+        w = named_weights(th, mode)
+        return w, np.asarray(smallest_weight(w), dtype=np.float64).reshape(th.shape[:-1])
+    share = _upper_shares(np.ascontiguousarray(th, dtype=np.float64))
+    share *= np.pi
+    return _from_upper_cosines(np.cos(share, out=share))
+
+
 def named_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
     """The matrices of a named mode (:func:`weight_matrix`) for scores (..., N) that are
     already valid (a caller that checked them, as the core does at every reset), a block of
@@ -133,8 +186,7 @@ def named_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
     if mode == "symmetric":
         w = np.full((*th.shape, n), 0.5)
     elif mode == "asymmetric" and n * n <= BLOCK_ENTRIES:
-        # one block: the upper triangle and 1 - its transpose in one pass (a reset of a
-        # small env pays for each numpy call, not for the arithmetic)
+        # one block: the upper triangle and 1 - its transpose in one pass
         w = pair_omega(th[..., :, None], th[..., None, :])
         w = np.where(_upper(n), w, 1.0 - np.swapaxes(w, -1, -2))
     elif mode == "asymmetric":

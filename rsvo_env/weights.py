@@ -19,7 +19,7 @@ from rsvo_env.pairs import Floor, floor_of, weight_floor
 from rsvo_env.responsibility import (
     Weighting,
     min_pair_weight,
-    named_weights,
+    named_weights_and_floor,
     scored_weight,
     smallest_weight,
     symmetric_envs,
@@ -63,9 +63,11 @@ class Weights:
         if self.matrix is not None:
             # the core's scores are valid: a named mode skips weight_matrix's checks
             th = theta[idx]
-            named = not callable(mode)
-            self.matrix[idx] = named_weights(th, mode) if named else weight_matrix(th, mode)
-            self.omega_min[idx] = smallest_weight(self.matrix[idx])
+            if callable(mode):
+                self.matrix[idx] = weight_matrix(th, mode)
+                self.omega_min[idx] = smallest_weight(self.matrix[idx])
+            else:
+                self.matrix[idx], self.omega_min[idx] = named_weights_and_floor(th, mode)
         else:
             self.omega_min[idx] = [min_pair_weight(theta[e], mode) for e in idx]
         self.version += 1

@@ -142,3 +142,26 @@ def test_pair_weights_from_scores_are_the_weight_matrix_entries(seed, n, scale, 
     W = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
     want = pairs.omega_pairs(W.reshape(3 * n, n), I, J, n)
     np.testing.assert_array_equal(got, want)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 4),
+    st.integers(2, 40),
+    st.floats(-300.0, 308.0),
+    st.floats(0.0, 0.5),
+)
+def test_compiled_weight_matrices_are_the_named_ones(seed, k, n, scale, zeros):
+    """The compiled matrices and floors a reset uses (``named_weights_and_floor``) are
+    ``named_weights`` and ``smallest_weight`` bit for bit, at any scale of scores."""
+    from rsvo_env.responsibility import named_weights, named_weights_and_floor, smallest_weight
+
+    rng = np.random.default_rng(seed)
+    theta = rng.uniform(0.0, 1.0, (k, n)) * 10.0**scale
+    theta[rng.random((k, n)) < zeros] = 0.0
+    theta[0, :2] = 1.5e308, 1.7e308  # a sum that overflows
+    w, floor = named_weights_and_floor(theta, "asymmetric")
+    want = named_weights(theta, "asymmetric")
+    np.testing.assert_array_equal(w, want)
+    np.testing.assert_array_equal(floor, smallest_weight(want))
