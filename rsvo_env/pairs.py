@@ -19,6 +19,7 @@ from rsvo_env.neighbors import DENSE_MAX_AGENTS, env_offsets
 from rsvo_env.responsibility import (
     Weighting,
     pair_omega,
+    share_of,
     symmetric_envs,
     weight_matrix,
 )
@@ -284,17 +285,11 @@ def omega_pairs(omega, I, J, n):
 
 @njit(cache=True)
 def _shares(theta, I, J):
-    """``theta_I / (theta_I + theta_J)`` of flat pairs, exactly as ``responsibility._share``
-    computes it (both halved where the sum overflows; 0.5 where both are 0)."""
+    """:func:`responsibility.share_of` of flat pairs."""
     P = I.shape[0]
     out = np.empty(P)
     for p in range(P):
-        ti, tj = theta[I[p]], theta[J[p]]
-        total = ti + tj
-        if not np.isfinite(total):
-            ti, tj = 0.5 * ti, 0.5 * tj
-            total = ti + tj
-        out[p] = ti / total if total > 0.0 else 0.5
+        out[p] = share_of(theta[I[p]], theta[J[p]])
     return out
 
 

@@ -126,21 +126,27 @@ def _unknown(mode: object) -> ValueError:
     )
 
 
+@njit(cache=True, inline="always")
+def share_of(ti: float, tj: float) -> float:
+    """One pair's ``theta_i / (theta_i + theta_j)``, compiled, as :func:`_share` computes it
+    (both halved where the sum overflows; 0.5 where both are 0)."""
+    total = ti + tj
+    if not np.isfinite(total):
+        ti, tj = 0.5 * ti, 0.5 * tj
+        total = ti + tj
+    return ti / total if total > 0.0 else 0.5
+
+
 @njit(cache=True)
 def _upper_shares(th):
-    """(K, N, N): ``theta_i / (theta_i + theta_j)`` above the diagonal of each of K envs'
-    scores (K, N), as :func:`_share` computes it; 0 elsewhere."""
+    """(K, N, N): :func:`share_of` above the diagonal of each of K envs' scores (K, N); 0
+    elsewhere."""
     K, n = th.shape
     out = np.zeros((K, n, n))
     for e in range(K):
         for i in range(n):
             for j in range(i + 1, n):
-                ti, tj = th[e, i], th[e, j]
-                total = ti + tj
-                if not np.isfinite(total):
-                    ti, tj = 0.5 * ti, 0.5 * tj
-                    total = ti + tj
-                out[e, i, j] = ti / total if total > 0.0 else 0.5
+                out[e, i, j] = share_of(th[e, i], th[e, j])
     return out
 
 
