@@ -169,19 +169,31 @@ def _from_upper_cosines(c):
     return w, smallest
 
 
+def _one_block(th: NDArray[np.float64]) -> bool:
+    """Whether the asymmetric matrices of scores (..., N) are built at once (compiled)."""
+    n = th.shape[-1]
+    return n >= 2 and th.size * n <= BLOCK_ENTRIES
+
+
+def _compiled_weights(th: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+    """Asymmetric matrices (..., N, N) and their smallest weights (...,) of scores (..., N) in
+    two compiled passes and numpy's cosine (a reset pays for calls, not for arithmetic)."""
+    n = th.shape[-1]
+    share = _upper_shares(np.ascontiguousarray(th, dtype=np.float64).reshape(-1, n))
+    share *= np.pi
+    w, smallest = _from_upper_cosines(np.cos(share, out=share))
+    return w.reshape(*th.shape, n), smallest.reshape(th.shape[:-1])
+
+
 def named_weights_and_floor(
     th: NDArray[np.float64], mode: str
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """:func:`named_weights` of scores (K, N), and each matrix's smallest off-diagonal weight
-    (:func:`smallest_weight`, K): for small envs in two compiled passes and numpy's cosine
-    (the same numbers, bit for bit; a reset pays for calls, not for arithmetic)."""
-    n = th.shape[-1]
-    if mode != "asymmetric" or n < 2 or th.ndim != 2 or th.shape[0] * n * n > BLOCK_ENTRIES:
-        w = named_weights(th, mode)
-        return w, np.asarray(smallest_weight(w), dtype=np.float64).reshape(th.shape[:-1])
-    share = _upper_shares(np.ascontiguousarray(th, dtype=np.float64))
-    share *= np.pi
-    return _from_upper_cosines(np.cos(share, out=share))
+    """:func:`named_weights` of scores (..., N), and each matrix's smallest off-diagonal
+    weight (:func:`smallest_weight`), the one block's from the same compiled pass."""
+    if mode == "asymmetric" and _one_block(th):
+        return _compiled_weights(th)
+    w = named_weights(th, mode)
+    return w, np.asarray(smallest_weight(w), dtype=np.float64).reshape(th.shape[:-1])
 
 
 def named_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
@@ -191,10 +203,8 @@ def named_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
     n = th.shape[-1]
     if mode == "symmetric":
         w = np.full((*th.shape, n), 0.5)
-    elif mode == "asymmetric" and n * n <= BLOCK_ENTRIES:
-        # one block: the upper triangle and 1 - its transpose in one pass
-        w = pair_omega(th[..., :, None], th[..., None, :])
-        w = np.where(_upper(n), w, 1.0 - np.swapaxes(w, -1, -2))
+    elif mode == "asymmetric" and _one_block(th):
+        return _compiled_weights(th)[0]
     elif mode == "asymmetric":
         w = np.empty((*th.shape, n))
         step = max(1, BLOCK_ENTRIES // max(n, 1))

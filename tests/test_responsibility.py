@@ -140,8 +140,13 @@ def test_pair_weights_from_scores_are_the_weight_matrix_entries(seed, n, scale, 
     modes = ["asymmetric", "symmetric", "asymmetric"]
     got = pairs.weights_of(theta, modes, I, J)
     W = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
-    want = pairs.omega_pairs(W.reshape(3 * n, n), I, J, n)
-    np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(got, pairs.omega_pairs(W.reshape(3 * n, n), I, J, n))
+    # and the numbers of Def. 1 as numpy computes them, an independent route
+    from rsvo_env.responsibility import scored_weight
+
+    th = theta.reshape(-1)
+    w = scored_weight(th[I], th[J], np.array([m == "symmetric" for m in modes])[I // n])
+    np.testing.assert_array_equal(got, np.stack([w, 1.0 - w], axis=1))
 
 
 @settings(max_examples=200, deadline=None)
@@ -153,15 +158,21 @@ def test_pair_weights_from_scores_are_the_weight_matrix_entries(seed, n, scale, 
     st.floats(0.0, 0.5),
 )
 def test_compiled_weight_matrices_are_the_named_ones(seed, k, n, scale, zeros):
-    """The compiled matrices and floors a reset uses (``named_weights_and_floor``) are
-    ``named_weights`` and ``smallest_weight`` bit for bit, at any scale of scores."""
-    from rsvo_env.responsibility import named_weights, named_weights_and_floor, smallest_weight
+    """The compiled matrices and floors (``named_weights_and_floor``, which resets and
+    ``weight_matrix`` use) are Def. 1's numbers as numpy computes them, bit for bit, at any
+    scale of scores: ``pair_omega`` above the diagonal, 1 minus its transpose below."""
+    from rsvo_env.responsibility import named_weights, named_weights_and_floor, pair_omega
 
     rng = np.random.default_rng(seed)
     theta = rng.uniform(0.0, 1.0, (k, n)) * 10.0**scale
     theta[rng.random((k, n)) < zeros] = 0.0
     theta[0, :2] = 1.5e308, 1.7e308  # a sum that overflows
+    upper = np.triu(np.ones((n, n), dtype=bool), 1)
+    formula = pair_omega(theta[:, :, None], theta[:, None, :])
+    want = np.where(upper, formula, 1.0 - np.swapaxes(formula, -1, -2))
+    want[:, np.arange(n), np.arange(n)] = 0.0
     w, floor = named_weights_and_floor(theta, "asymmetric")
-    want = named_weights(theta, "asymmetric")
     np.testing.assert_array_equal(w, want)
-    np.testing.assert_array_equal(floor, smallest_weight(want))
+    np.testing.assert_array_equal(named_weights(theta, "asymmetric"), want)
+    off = ~np.eye(n, dtype=bool)
+    np.testing.assert_array_equal(floor, np.where(off, want, np.inf).min(axis=(1, 2)))
