@@ -108,6 +108,10 @@ class Bodies:
         made = Bodies.made(self.radii, lo, hi, self.r_max, False)
         return replace(made, lookahead=np.where(holonomic, 0.0, lookahead), limits=self.limits)
 
+    def reach(self, E: int, n: int) -> NDArray[np.float64]:
+        """(E, N) the largest safe distance of each agent's pairs, ``r_i + max_j r_j``."""
+        return self.radii.reshape(E, n) + self.r_max[:, None]
+
     def pair_distance(self, I: NDArray, J: NDArray) -> NDArray[np.float64]:
         """(P,) the safe distance ``r_i + r_j`` of the pairs (I, J)."""
         return self.radii[I] + self.radii[J]

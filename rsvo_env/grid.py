@@ -47,15 +47,29 @@ def _span(v, r, lo, cell, m):
     return int(a), int(b)
 
 
+@njit(cache=True, inline="always")
+def _may_bind(dx, dy, d2, ux, uy, s, a, R):
+    """Whether a row ``2 yᵀu <= a (|y|^2 - R^2)`` (y = (dx, dy) the neighbour's offset,
+    ``d2 = |y|^2``) can bind within the disk with diameter [0, u] (``s = |u|``,
+    ``rsvo_env.projection_disk``): ``a (d2 - R^2) - yᵀu < |y| s``, widened by 1e-9 as the
+    disk's support is there, without a square root."""
+    lhs = a * (d2 - R * R) - (dx * ux + dy * uy)
+    return lhs < 0.0 or lhs * lhs < d2 * (s * s) * (1.0 + 2e-9)
+
+
 @njit(cache=True)
-def _pairs(x, radius, group, cell):
+def _pairs(x, radius, group, cell, nominal, scaled_floor, reach):
     """Flat pair keys ``e * n + i``, ``e * n + j`` (i < j) of agents closer than the larger of
     ``radius[i, group[j]]`` and ``radius[j, group[i]]``, each pair once: agent i scans group
     g's grid within ``radius[i, g]``, and a pair is kept from the scan of the agent with the
     larger radius against the other's group (the lower index on a tie), the one scan sure to
     find it. So agent i skips group g when every member's radius against i's group exceeds
-    its own: each pair it could find, the member keeps."""
+    its own: each pair it could find, the member keeps. With ``nominal`` (E, N, 2) (else
+    empty), a pair is kept only where a side's row can bind within its disk [0, nominal]
+    (:func:`_may_bind`, weight times gamma ``scaled_floor`` (E, N, K), safe distance
+    ``reach`` (E, N)): the owning scan tests both sides."""
     E, n, K = radius.shape
+    disk = nominal.shape[0] > 0
     cap = max(16, 8 * E * n)
     I = np.empty(cap, dtype=np.int64)
     J = np.empty(cap, dtype=np.int64)
@@ -75,35 +89,47 @@ def _pairs(x, radius, group, cell):
             # the group's agents in cell order, so a cell's scan reads contiguous memory
             idx = members[order]
             px, py, rr = xe[idx, 0].copy(), xe[idx, 1].copy(), re[idx].copy()
+            if disk:
+                ux, uy = nominal[e, idx, 0].copy(), nominal[e, idx, 1].copy()
+                us = np.sqrt(ux * ux + uy * uy)
+                aa, RR = scaled_floor[e, idx].copy(), reach[e, idx].copy()
             for i in range(n):
                 ri = re[i, g]
                 gi = ge[i]
                 if not ri > 0.0 or smallest[g, gi] > ri:
                     continue
+                if disk:
+                    uxi, uyi = nominal[e, i, 0], nominal[e, i, 1]
+                    si, ai, Ri = np.sqrt(uxi * uxi + uyi * uyi), scaled_floor[e, i, g], reach[e, i]
                 r2 = ri * ri
                 a0, b0 = _span(xe[i, 0], ri, lo0, c, nx)
                 a1, b1 = _span(xe[i, 1], ri, lo1, c, ny)
                 for gx in range(a0, b0 + 1):
-                    for gy in range(a1, b1 + 1):
-                        cid = gx * ny + gy
-                        for s in range(start[cid], start[cid + 1]):
-                            j = idx[s]
-                            if j == i:
-                                continue
-                            dx, dy = xe[i, 0] - px[s], xe[i, 1] - py[s]
-                            d2 = dx * dx + dy * dy
-                            rj = rr[s, gi]
-                            if d2 > r2 or (d2 <= rj * rj and (rj > ri or (rj == ri and j < i))):
-                                continue  # beyond i's radius, or j's scan keeps it
-                            if m == cap:
-                                cap *= 2
-                                I2 = np.empty(cap, dtype=np.int64)
-                                J2 = np.empty(cap, dtype=np.int64)
-                                I2[:m], J2[:m] = I[:m], J[:m]
-                                I, J = I2, J2
-                            I[m] = e * n + min(i, j)
-                            J[m] = e * n + max(i, j)
-                            m += 1
+                    # cells a1..b1 of a column are consecutive: their agents are one run
+                    for s in range(start[gx * ny + a1], start[gx * ny + b1 + 1]):
+                        j = idx[s]
+                        if j == i:
+                            continue
+                        dx, dy = xe[i, 0] - px[s], xe[i, 1] - py[s]
+                        d2 = dx * dx + dy * dy
+                        rj = rr[s, gi]
+                        if d2 > r2 or (d2 <= rj * rj and (rj > ri or (rj == ri and j < i))):
+                            continue  # beyond i's radius, or j's scan keeps it
+                        if disk and not (
+                            _may_bind(-dx, -dy, d2, uxi, uyi, si, ai, Ri)
+                            or (d2 <= rj * rj and _may_bind(dx, dy, d2, ux[s], uy[s], us[s],
+                                                            aa[s, gi], RR[s]))
+                        ):  # fmt: skip
+                            continue  # neither row can bind
+                        if m == cap:
+                            cap *= 2
+                            I2 = np.empty(cap, dtype=np.int64)
+                            J2 = np.empty(cap, dtype=np.int64)
+                            I2[:m], J2[:m] = I[:m], J[:m]
+                            I, J = I2, J2
+                        I[m] = e * n + min(i, j)
+                        J[m] = e * n + max(i, j)
+                        m += 1
     return I[:m], J[:m]
 
 
@@ -177,16 +203,35 @@ def _nearest(x, out):
             out[e, i] = np.sqrt(best)
 
 
+@njit(cache=True)
+def _mean_radii(r):
+    """(E, K) the mean positive finite radius against each group (1 where there is none)."""
+    E, n, K = r.shape
+    total = np.zeros((E, K))
+    count = np.zeros((E, K))
+    for e in range(E):
+        for i in range(n):
+            for k in range(K):
+                v = r[e, i, k]
+                if v > 0.0 and np.isfinite(v):
+                    total[e, k] += v
+                    count[e, k] += 1.0
+    return np.where(count > 0, total / np.maximum(count, 1.0), 1.0)
+
+
 def pairs_within_radii(
     positions: NDArray[np.float64],
     radius: NDArray[np.float64],
     group: NDArray[np.int64] | None = None,
+    disk: tuple[NDArray, NDArray, NDArray] | None = None,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Pairs (I < J, flat indices ``e * N + i``, sorted) of agents of the same env closer than
     the larger of their two radii. ``positions`` (E, N, 2); ``radius`` (E, N), or (E, N, K)
     with ``group`` (E, N) labels in [0, K): agent i's radius against the agents of group g is
     ``radius[e, i, g]`` (>= 0; with radius 0 an agent searches nothing). Each group gets a
-    grid of cells the mean radius against it."""
+    grid of cells the mean radius against it. ``disk``: (nominal (E, N, 2), weight floor
+    times gamma (E, N, K), safe distance (E, N)), to keep only the pairs with a row that can
+    bind within its agent's disk [0, nominal] (``rsvo_env.projection_disk``)."""
     x = np.ascontiguousarray(positions, dtype=np.float64)
     r = np.asarray(radius, dtype=np.float64)
     if r.ndim == 2:
@@ -196,10 +241,11 @@ def pairs_within_radii(
         group = np.zeros(x.shape[:2], dtype=np.int64)
     # the mean positive finite radius against each group (a median costs more than it saves);
     # an agent with an infinite radius scans every cell whatever their size
-    sized = (r > 0) & np.isfinite(r)
-    count = sized.sum(axis=1)
-    cell = np.where(count > 0, np.where(sized, r, 0.0).sum(axis=1) / np.maximum(count, 1), 1.0)
-    I, J = _pairs(x, r, np.ascontiguousarray(group, dtype=np.int64), cell)
+    cell = _mean_radii(r)
+    if disk is None:
+        disk = (np.zeros((0, 0, 2)), np.zeros((0, 0, 0)), np.zeros((0, 0)))
+    disk = tuple(np.ascontiguousarray(a, dtype=np.float64) for a in disk)
+    I, J = _pairs(x, r, np.ascontiguousarray(group, dtype=np.int64), cell, *disk)
     return _sorted(I, J, x.shape[0] * x.shape[1])
 
 

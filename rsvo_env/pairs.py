@@ -55,16 +55,35 @@ def agent_radii(
 ) -> NDArray[np.float64]:
     """Per agent, the distance beyond which none of its rows with a positive weight can bind:
     :func:`sensing_radius` of its own smallest positive weight (0 for an agent without one).
-    ``omega_floor`` (E, N, K); ``speed`` (E, N): its box's largest input vector; ``reach``
-    (E, N): the largest safe distance of its pairs, ``r_i + max_j r_j``."""
-    u, R = speed[..., None], reach[..., None]
-    searched = np.isfinite(omega_floor)
-    wg = np.where(searched & (omega_floor > 0), omega_floor, 1.0) * gamma
-    r = (u + np.sqrt(u * u + (wg * R) ** 2)) / wg
-    # a floor at or below 0 (a weight within rounding of 0) binds at any distance; the root is
-    # exact only in exact arithmetic, so a pair right at it stays examined
-    r = np.where(omega_floor > 0, r * (1.0 + 1e-9), np.inf)
-    return np.where(searched, r, 0.0)
+    ``omega_floor`` (E, N, K); ``speed`` (E, N): the largest norm its action can take (its
+    box's largest input vector, or less: ``rsvo_env.projection_disk``); ``reach`` (E, N): the
+    largest safe distance of its pairs, ``r_i + max_j r_j``."""
+    f = np.ascontiguousarray(omega_floor, dtype=np.float64)
+    out = np.empty(f.shape)
+    _agent_radii(f, float(gamma), np.ascontiguousarray(speed, dtype=np.float64),
+                 np.ascontiguousarray(reach, dtype=np.float64), out)  # fmt: skip
+    return out
+
+
+@njit(cache=True)
+def _agent_radii(floor, gamma, speed, reach, out):
+    """:func:`agent_radii` in one compiled pass: the root of ``w gamma d^2 - 2 u d - w gamma
+    R^2`` per floor ``w``."""
+    E, n, K = floor.shape
+    for e in range(E):
+        for i in range(n):
+            u, R = speed[e, i], reach[e, i]
+            for k in range(K):
+                w = floor[e, i, k]
+                if not np.isfinite(w):
+                    out[e, i, k] = 0.0  # no member to search
+                elif w > 0.0:
+                    wg = w * gamma
+                    # the root is exact only in exact arithmetic: a pair right at it stays examined
+                    out[e, i, k] = (u + np.sqrt(u * u + (wg * R) ** 2)) / wg * (1.0 + 1e-9)
+                else:
+                    # a floor at or below 0 (a weight within rounding of 0) binds at any distance
+                    out[e, i, k] = np.inf
 
 
 def double_integrator_radii(
@@ -217,12 +236,13 @@ def floor_of(theta: NDArray, mode: Weighting, matrix: NDArray | None = None) -> 
 
 
 def pairs_within_agent_radii(
-    positions: NDArray, radius: NDArray, floor: Floor
+    positions: NDArray, radius: NDArray, floor: Floor, disk: tuple | None = None
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Pairs (I < J, flat indices) of agents of the same env closer than the larger of their
     radii against each other's group (``radius`` (E, N, K) from ``floor``), plus the floor's
-    required pairs, sorted: the all-pairs order, kept."""
-    I, J = grid.pairs_within_radii(positions, radius, floor[1])
+    required pairs, sorted: the all-pairs order, kept. ``disk``: see
+    :func:`grid.pairs_within_radii`."""
+    I, J = grid.pairs_within_radii(positions, radius, floor[1], disk)
     required = floor[2]
     if len(required) == 0:
         return I, J

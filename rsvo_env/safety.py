@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rsvo_env import pairs, scene_barrier, solvers
+from rsvo_env import pairs, projection_disk, scene_barrier, solvers
 from rsvo_env.bodies import Bodies
 from rsvo_env.dynamics.unicycle import rotate_rows
 from rsvo_env.filter_config import FilterConfig
@@ -55,6 +55,8 @@ class SafetyFilter:
         self._default_bodies: dict[tuple[int, int], Bodies] = {}
         # the last culling radii: (floor, bodies, radii, reach), see _culling_radii
         self._radii: tuple[pairs.Floor, Bodies, NDArray, NDArray] | None = None
+        # the last floor and its weights times gamma (the search by the nominal)
+        self._scaled_floor: tuple[pairs.Floor | None, NDArray | None] = (None, None)
 
     def pair_radius(
         self,
@@ -246,7 +248,17 @@ class SafetyFilter:
             )
             nearest = None
         pos = positions.reshape(E * n, 2)
-        reach = None
+        vel = None if velocities is None else velocities.reshape(E * n, 2)
+        caps = obstacles if obstacles is None or obstacles.ndim == 3 else obstacles[None]
+
+        def rows_of(I: NDArray, J: NDArray) -> tuple[Any, Any]:
+            weights = self.pair_weights(theta, omega, I, J, weighting)
+            rows, obstacle_h = cfg.model.filter_rows(cfg, pos, vel, weights, I, J, bodies, caps, n)
+            if rotation is not None:
+                rows = replace(rows, flat_A=rotate_rows(rows.flat_A, rows.owner, rotation))
+            return rows, obstacle_h
+
+        reach, rows = None, None
         if dense:
             # Few agents: every pair, and exact culling drops the rows that cannot bind.
             I, J = pairs.all_pairs(n, E)
@@ -254,16 +266,22 @@ class SafetyFilter:
             if floor is None:
                 floor = self._floor(theta, omega)
             radii, reach = self._culling_radii(floor, velocities, bodies)
-            I, J = pairs.pairs_within_agent_radii(positions, radii, floor)
+            if cfg.model.nominal_disk:
+                if self._scaled_floor[0] is not floor:  # kept while the floor is
+                    self._scaled_floor = (floor, floor[0] * cfg.gamma)
+                I, J, rows, obstacle_h, reach = projection_disk.search(
+                    cfg, positions, nominal, floor, self._scaled_floor[1], radii, bodies, rows_of
+                )
+            else:
+                I, J = pairs.pairs_within_agent_radii(positions, radii, floor)
         else:
             radius = self.pair_radius(theta, omega, omega_min, bodies)
             I, J = pairs.candidate_pairs(positions, radius)
-        weights = self.pair_weights(theta, omega, I, J, weighting)
-        vel = None if velocities is None else velocities.reshape(E * n, 2)
-        caps = obstacles if obstacles is None or obstacles.ndim == 3 else obstacles[None]
-        rows, obstacle_h = cfg.model.filter_rows(cfg, pos, vel, weights, I, J, bodies, caps, n)
-        if rotation is not None:
-            rows = replace(rows, flat_A=rotate_rows(rows.flat_A, rows.owner, rotation))
+        if rows is None:
+            rows, obstacle_h = rows_of(I, J)
+        if cfg.model.nominal_disk:
+            exempt = projection_disk.negative_rows(rows.offsets, rows.flat_b)
+            rows = projection_disk.cull(rows, nominal.reshape(-1, 2), exempt)
         actions, feasible, active, violation = solvers.solve(
             cfg.solver, solve_nominal.reshape(E * n, 2), rows.flat_A, rows.flat_b, rows.offsets,
             solve_box.lo, solve_box.hi,

@@ -31,6 +31,9 @@ class Dynamics:
     needs_velocities: ClassVar[bool] = False
     # whether the compiled dense filter (rsvo_env.solvers.dense) computes this model's rows
     dense_kernel: ClassVar[bool] = False
+    # whether its QP projects the nominal onto a set that holds u = 0 while no row has b < 0,
+    # so that the solution lies in the disk with diameter [0, nominal] (rsvo_env.projection_disk)
+    nominal_disk: ClassVar[bool] = False
     # whether one radius from the smallest weight alone bounds every binding pair
     # (:meth:`search_radius`); else the state decides it (:meth:`culling_radii`)
     radius_from_weights: ClassVar[bool] = False

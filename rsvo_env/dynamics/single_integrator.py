@@ -27,6 +27,7 @@ class SingleIntegrator(Dynamics):
     name = "single_integrator"
     limit_name = "u_max"
     dense_kernel = True
+    nominal_disk = True
     radius_from_weights = True
     per_agent_bodies = True
     velocity_input = True
@@ -58,12 +59,13 @@ class SingleIntegrator(Dynamics):
             positions, bodies.radii, capsules, n, float(cfg.gamma), bodies.lo, bodies.hi, True
         )
 
-    def culling_radii(self, cfg, omega_floor, velocities, bodies):
+    def culling_radii(self, cfg, omega_floor, velocities, bodies, speed=None):
         from rsvo_env import pairs
 
         E, n = omega_floor.shape[:2]
-        reach = bodies.radii.reshape(E, n) + bodies.r_max[:, None]
-        return pairs.agent_radii(omega_floor, cfg.gamma, bodies.speed.reshape(E, n), reach)
+        if speed is None:  # the box's: any action may be the solution
+            speed = bodies.speed.reshape(E, n)
+        return pairs.agent_radii(omega_floor, cfg.gamma, speed, bodies.reach(E, n))
 
     def search_radius(self, cfg, omega_min, bodies):
         from rsvo_env import pairs

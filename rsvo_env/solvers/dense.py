@@ -1,7 +1,8 @@
 """The dense single-integrator filter in one compiled pass, for scenes of few agents.
 
 For every agent of every env: its row against every other agent of the env (paper, eq. ``qp``,
-with ``barriers.single_integrator_row``), exact culling (``barriers.support``), and the exact
+with ``barriers.single_integrator_row``), exact culling (``barriers.support`` over the box,
+``projection_disk.disk_support`` over the disk the solution lies in), and the exact
 solve (``exact.solve_rows``). The same arithmetic, rows in the same order, as the general path
 (pairs, packing, batched solve), without its intermediate arrays: bit-identical results, tested.
 """
@@ -14,6 +15,7 @@ from numpy.typing import NDArray
 
 from rsvo_env import threads
 from rsvo_env.barriers import single_integrator_row, support
+from rsvo_env.projection_disk import disk_support
 from rsvo_env.solvers.exact import solve_rows
 
 # Up to this many agents an env, examining every pair here costs less than the general path's
@@ -27,28 +29,34 @@ def _one_env(
     moved,
 ):  # fmt: skip
     n = x.shape[1]
-    xs, ys, rs, h, margin = buf
+    xs, ys, rs, h, margin, disk, bs = buf
     for j in range(n):
         xs[j], ys[j], rs[j] = x[e, j, 0], x[e, j, 1], radii[e, j]
     min_h = np.inf
     for i in range(n):
         lo0, lo1, hi0, hi1 = lo[e, i, 0], lo[e, i, 1], hi[e, i, 0], hi[e, i, 1]
         xi, yi, ri = xs[i], ys[i], rs[i]
-        # First every neighbour's barrier value and by how much its row clears the box (it
-        # can bind only where b < support), branch-free so that the loop vectorises; then the
-        # few rows that can bind, in neighbour order.
+        ux, uy = nom[e, i, 0], nom[e, i, 1]
+        s = np.sqrt(ux * ux + uy * uy)
+        # First every neighbour's barrier value and by how much its row clears the box and
+        # the disk [0, nominal] (it can bind only where b is below both supports; the disk
+        # only while no row has b < 0, rsvo_env.projection_disk), branch-free so that the loop
+        # vectorises; then the few rows that can bind, in neighbour order.
         for j in range(n):
             R = ri + rs[j]
             w = omega[e, i, j]
             ax, ay, b, hj = single_integrator_row(xi, yi, xs[j], ys[j], w, gamma, R * R)
-            h[j] = hj
+            h[j], bs[j] = hj, b
             margin[j] = b - support(ax, ay, lo0, lo1, hi0, hi1)
-        h[i], margin[i] = np.inf, 0.0
+            disk[j] = b - disk_support(ax, ay, ux, uy, s)
+        h[i], margin[i], bs[i] = np.inf, 0.0, 0.0
+        exempt = False
         for j in range(n):
             min_h = min(min_h, h[j])
+            exempt = exempt or bs[j] < 0.0
         k = 0
         for j in range(n):
-            if margin[j] < 0.0:
+            if margin[j] < 0.0 and (exempt or disk[j] < 0.0):
                 R = ri + rs[j]
                 ax, ay, b, _ = single_integrator_row(
                     xi, yi, xs[j], ys[j], omega[e, i, j], gamma, R * R
@@ -70,8 +78,10 @@ def _one_env(
 
 @njit(cache=True, inline="always")
 def _buffers(n):
-    """One env's positions (x, y), radii, barrier values and box margins, one slot an agent."""
-    return np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    """One env's positions (x, y), radii, barrier values, box and disk margins and right
+    sides, one slot an agent."""
+    return (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+            np.empty(n))  # fmt: skip
 
 
 @njit(cache=True)
