@@ -29,8 +29,11 @@ Floor = tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]
 
 # Groups of scores the large-N pair search keeps apart (theta_floor): at most this many, each
 # spanning a factor GROUP_RATIO (or its square, its fourth power, ... when more are occupied).
+# Since the search keeps only pairs that can bind in their disks (projection_disk), wider
+# groups cost fewer queries than their looser floors add (1.5 against 1.25: about 10 % less
+# per step at N = 1,000 to 30,000 with theta 1..10, measured alternating in one process).
 THETA_GROUPS = 16
-GROUP_RATIO = 1.25
+GROUP_RATIO = 1.5
 
 
 def sensing_radius(
