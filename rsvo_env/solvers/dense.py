@@ -29,7 +29,7 @@ def _one_env(
     moved,
 ):  # fmt: skip
     n = x.shape[1]
-    xs, ys, rs, h, margin, disk, bs = buf
+    xs, ys, rs, h, margin, bs = buf
     for j in range(n):
         xs[j], ys[j], rs[j] = x[e, j, 0], x[e, j, 1], radii[e, j]
     min_h = np.inf
@@ -38,29 +38,31 @@ def _one_env(
         xi, yi, ri = xs[i], ys[i], rs[i]
         ux, uy = nom[e, i, 0], nom[e, i, 1]
         s = np.sqrt(ux * ux + uy * uy)
-        # First every neighbour's barrier value and by how much its row clears the box and
-        # the disk [0, nominal] (it can bind only where b is below both supports; the disk
-        # only while no row has b < 0, rsvo_env.projection_disk), branch-free so that the loop
-        # vectorises; then the few rows that can bind, in neighbour order.
+        # First every neighbour's barrier value and by how much its row clears the box (it
+        # can bind only where b < support), branch-free so that the loop vectorises; then the
+        # few rows that can bind, in neighbour order, of those also only the rows that can
+        # bind in the disk [0, nominal] while no row has b < 0 (rsvo_env.projection_disk).
         for j in range(n):
             R = ri + rs[j]
             w = omega[e, i, j]
             ax, ay, b, hj = single_integrator_row(xi, yi, xs[j], ys[j], w, gamma, R * R)
             h[j], bs[j] = hj, b
             margin[j] = b - support(ax, ay, lo0, lo1, hi0, hi1)
-            disk[j] = b - disk_support(ax, ay, ux, uy, s)
         h[i], margin[i], bs[i] = np.inf, 0.0, 0.0
-        exempt = False
+        b_min = 0.0
         for j in range(n):
             min_h = min(min_h, h[j])
-            exempt = exempt or bs[j] < 0.0
+            b_min = min(b_min, bs[j])
+        exempt = b_min < 0.0
         k = 0
         for j in range(n):
-            if margin[j] < 0.0 and (exempt or disk[j] < 0.0):
+            if margin[j] < 0.0:
                 R = ri + rs[j]
                 ax, ay, b, _ = single_integrator_row(
                     xi, yi, xs[j], ys[j], omega[e, i, j], gamma, R * R
                 )
+                if not exempt and b >= disk_support(ax, ay, ux, uy, s):
+                    continue
                 norm = np.hypot(ax, ay)
                 if norm > 0.0:
                     rows[k, 0], rows[k, 1], rows[k, 2] = ax / norm, ay / norm, b / norm
@@ -78,10 +80,9 @@ def _one_env(
 
 @njit(cache=True, inline="always")
 def _buffers(n):
-    """One env's positions (x, y), radii, barrier values, box and disk margins and right
-    sides, one slot an agent."""
-    return (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-            np.empty(n))  # fmt: skip
+    """One env's positions (x, y), radii, barrier values, box margins and right sides, one
+    slot an agent."""
+    return np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
 
 
 @njit(cache=True)
