@@ -58,7 +58,7 @@ def _may_bind(dx, dy, d2, ux, uy, s, a, R):
 
 
 @njit(cache=True)
-def _pairs(x, radius, group, cell, nominal, scaled_floor, reach):
+def _pairs(x, radius, group, cell, nominal, scaled_floor, reach, boxed):
     """Flat pair keys ``e * n + i``, ``e * n + j`` (i < j) of agents closer than the larger of
     ``radius[i, group[j]]`` and ``radius[j, group[i]]``, each pair once: agent i scans group
     g's grid within ``radius[i, g]``, and a pair is kept from the scan of the agent with the
@@ -67,7 +67,8 @@ def _pairs(x, radius, group, cell, nominal, scaled_floor, reach):
     its own: each pair it could find, the member keeps. With ``nominal`` (E, N, 2) (else
     empty), a pair is kept only where a side's row can bind within its disk [0, nominal]
     (:func:`_may_bind`, weight times gamma ``scaled_floor`` (E, N, K), safe distance
-    ``reach`` (E, N)): the owning scan tests both sides."""
+    ``reach`` (E, N)) or the side is ``boxed`` (E, N: its rows are all kept): the owning
+    scan tests both sides."""
     E, n, K = radius.shape
     disk = nominal.shape[0] > 0
     cap = max(16, 8 * E * n)
@@ -92,7 +93,7 @@ def _pairs(x, radius, group, cell, nominal, scaled_floor, reach):
             if disk:
                 ux, uy = nominal[e, idx, 0].copy(), nominal[e, idx, 1].copy()
                 us = np.sqrt(ux * ux + uy * uy)
-                aa, RR = scaled_floor[e, idx].copy(), reach[e, idx].copy()
+                aa, RR, bx = scaled_floor[e, idx].copy(), reach[e, idx].copy(), boxed[e, idx].copy()
             for i in range(n):
                 ri = re[i, g]
                 gi = ge[i]
@@ -116,9 +117,10 @@ def _pairs(x, radius, group, cell, nominal, scaled_floor, reach):
                         if d2 > r2 or (d2 <= rj * rj and (rj > ri or (rj == ri and j < i))):
                             continue  # beyond i's radius, or j's scan keeps it
                         if disk and not (
-                            _may_bind(-dx, -dy, d2, uxi, uyi, si, ai, Ri)
-                            or (d2 <= rj * rj and _may_bind(dx, dy, d2, ux[s], uy[s], us[s],
-                                                            aa[s, gi], RR[s]))
+                            boxed[e, i]
+                            or _may_bind(-dx, -dy, d2, uxi, uyi, si, ai, Ri)
+                            or (d2 <= rj * rj and (bx[s] or _may_bind(dx, dy, d2, ux[s], uy[s],
+                                                                      us[s], aa[s, gi], RR[s])))
                         ):  # fmt: skip
                             continue  # neither row can bind
                         if m == cap:
@@ -223,15 +225,16 @@ def pairs_within_radii(
     positions: NDArray[np.float64],
     radius: NDArray[np.float64],
     group: NDArray[np.int64] | None = None,
-    disk: tuple[NDArray, NDArray, NDArray] | None = None,
+    disk: tuple[NDArray, NDArray, NDArray, NDArray] | None = None,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Pairs (I < J, flat indices ``e * N + i``, sorted) of agents of the same env closer than
     the larger of their two radii. ``positions`` (E, N, 2); ``radius`` (E, N), or (E, N, K)
     with ``group`` (E, N) labels in [0, K): agent i's radius against the agents of group g is
     ``radius[e, i, g]`` (>= 0; with radius 0 an agent searches nothing). Each group gets a
     grid of cells the mean radius against it. ``disk``: (nominal (E, N, 2), weight floor
-    times gamma (E, N, K), safe distance (E, N)), to keep only the pairs with a row that can
-    bind within its agent's disk [0, nominal] (``rsvo_env.projection_disk``)."""
+    times gamma (E, N, K), safe distance (E, N), boxed (E, N)), to keep only the pairs with a
+    row that can bind within its agent's disk [0, nominal] (``rsvo_env.projection_disk``) or
+    of a boxed agent."""
     x = np.ascontiguousarray(positions, dtype=np.float64)
     r = np.asarray(radius, dtype=np.float64)
     if r.ndim == 2:
@@ -243,9 +246,12 @@ def pairs_within_radii(
     # an agent with an infinite radius scans every cell whatever their size
     cell = _mean_radii(r)
     if disk is None:
-        disk = (np.zeros((0, 0, 2)), np.zeros((0, 0, 0)), np.zeros((0, 0)))
-    disk = tuple(np.ascontiguousarray(a, dtype=np.float64) for a in disk)
-    I, J = _pairs(x, r, np.ascontiguousarray(group, dtype=np.int64), cell, *disk)
+        disk = (np.zeros((0, 0, 2)), np.zeros((0, 0, 0)), np.zeros((0, 0)),
+                np.zeros((0, 0), dtype=np.bool_))  # fmt: skip
+    *floats, boxed = disk
+    floats = [np.ascontiguousarray(a, dtype=np.float64) for a in floats]
+    I, J = _pairs(x, r, np.ascontiguousarray(group, dtype=np.int64), cell, *floats,
+                  np.ascontiguousarray(boxed, dtype=np.bool_))  # fmt: skip
     return _sorted(I, J, x.shape[0] * x.shape[1])
 
 

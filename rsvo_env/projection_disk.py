@@ -40,30 +40,39 @@ MARGIN = 1e-9
 def search(
     cfg: FilterConfig, positions: NDArray, nominal: NDArray, floor: Floor,
     scaled_floor: NDArray, box_radii: NDArray, bodies: Bodies, rows_of: Callable,
-) -> tuple[NDArray, NDArray, Rows, Any, NDArray]:  # fmt: skip
+    likely: NDArray[np.bool_] | None = None,
+) -> tuple[NDArray, NDArray, Rows, Any, NDArray, NDArray[np.bool_]]:  # fmt: skip
     """The large-N pair search by the nominal: each agent searches within the radius of
     ``min(|ū|, |U|)`` (E, N, K, from ``floor``) and keeps a pair where a side's row can bind
     within its disk at its floor's weight (``scaled_floor``: the floors times gamma). An agent
     in a pair closer than its safe distance (every such pair is within that radius), or with
-    an obstacle row ``b < 0``, adds the pairs within its box's radius (``box_radii``).
-    ``rows_of(I, J)`` builds the rows and the obstacles' barrier values. Returns the pairs,
-    the rows, the obstacles' barrier values and each scene's smallest search radius."""
+    an obstacle row ``b < 0``, is exempt: it keeps every pair within its box's radius
+    (``box_radii``). The agents ``likely`` (M,) to be (the last call's exempt: a jam stays
+    jammed) search so at once; any other exempt agent adds its pairs after. Whatever
+    ``likely`` holds, the rows that can bind are found. ``rows_of(I, J)`` builds the rows and
+    the obstacles' barrier values. Returns the pairs, the rows, the obstacles' barrier
+    values, each scene's smallest search radius and the exempt agents (M,)."""
     E, n = positions.shape[:2]
+    M = E * n
+    boxed = np.zeros(M, dtype=np.bool_) if likely is None else likely
     speed = speeds(nominal, bodies)
     radii = cfg.model.culling_radii(cfg, floor[0], None, bodies, speed)
-    disk = (nominal, scaled_floor, bodies.reach(E, n))
-    I, J = pairs.pairs_within_agent_radii(positions, radii, floor, disk)
+    searched = np.where(boxed.reshape(E, n, 1), box_radii, radii) if boxed.any() else radii
+    disk = (nominal, scaled_floor, bodies.reach(E, n), boxed.reshape(E, n))
+    I, J = pairs.pairs_within_agent_radii(positions, searched, floor, disk)
     # too close, if only by rounding: a superset of the agents with a pair row b < 0
-    exempt = too_close(positions.reshape(E * n, 2), I, J, bodies.radii)
-    if exempt.any():
-        I, J = box_pairs(positions, box_radii, floor[1], exempt, I, J)
+    exempt = too_close(positions.reshape(M, 2), I, J, bodies.radii)
+    late = exempt & ~boxed
+    if late.any():
+        I, J = box_pairs(positions, box_radii, floor[1], late, I, J)
     rows, obstacle_h = rows_of(I, J)
-    late = negative_rows(rows.offsets, rows.flat_b) & ~exempt
+    late = negative_rows(rows.offsets, rows.flat_b) & ~exempt & ~boxed
     if late.any():  # an obstacle row b < 0
         exempt |= late
         I, J = box_pairs(positions, box_radii, floor[1], late, I, J)
         rows, obstacle_h = rows_of(I, J)
-    return I, J, rows, obstacle_h, smallest_radius(radii, box_radii, exempt.reshape(E, n))
+    reach = smallest_radius(radii, box_radii, (exempt | boxed).reshape(E, n))
+    return I, J, rows, obstacle_h, reach, exempt
 
 
 def speeds(nominal: NDArray[np.float64], bodies: Bodies) -> NDArray[np.float64]:

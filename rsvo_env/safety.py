@@ -57,6 +57,8 @@ class SafetyFilter:
         self._radii: tuple[pairs.Floor, Bodies, NDArray, NDArray] | None = None
         # the last floor and its weights times gamma (the search by the nominal)
         self._scaled_floor: tuple[pairs.Floor | None, NDArray | None] = (None, None)
+        # the agents the last search by the nominal found exempt (likely again: a jam holds)
+        self._exempt = np.zeros(0, dtype=bool)
 
     def pair_radius(
         self,
@@ -266,12 +268,17 @@ class SafetyFilter:
             if floor is None:
                 floor = self._floor(theta, omega)
             radii, reach = self._culling_radii(floor, velocities, bodies)
-            if cfg.model.nominal_disk:
+            # the search by the nominal pays where the scores spread (an altruist's radius
+            # against egoists spans many neighbours); with one group of scores its tests
+            # cost more than the pairs they drop (measured: docs/math.md)
+            if cfg.model.nominal_disk and floor[0].shape[-1] > 1:
                 if self._scaled_floor[0] is not floor:  # kept while the floor is
                     self._scaled_floor = (floor, floor[0] * cfg.gamma)
-                I, J, rows, obstacle_h, reach = projection_disk.search(
-                    cfg, positions, nominal, floor, self._scaled_floor[1], radii, bodies, rows_of
-                )
+                likely = self._exempt if self._exempt.shape == (E * n,) else None
+                I, J, rows, obstacle_h, reach, self._exempt = projection_disk.search(
+                    cfg, positions, nominal, floor, self._scaled_floor[1], radii, bodies,
+                    rows_of, likely,
+                )  # fmt: skip
             else:
                 I, J = pairs.pairs_within_agent_radii(positions, radii, floor)
         else:
