@@ -122,7 +122,8 @@ def write(
             if orca
             else "; pyrvo not installed: `pip install -e .[baselines]`"
         )
-        + f"). Each figure is the median of {blocks} alternating blocks of steps.",
+        + f"). Each figure is the fastest of {blocks} alternating blocks of steps (other "
+        "processes only ever slow a block down).",
         "",
         "## 1. Single-integrator crowd: filtered step per agent, ours against ORCA",
         "",
