@@ -46,7 +46,11 @@ def footprint(n: int, case: str) -> dict:
     x = Crowd(num_agents=n, spacing_factor=1.0)._spread(np.random.default_rng(n))
     theta = scores(n, case)
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0, dt=0.01))
-    rows = flt.filter(x, np.zeros_like(x), theta).rows
+    # every agent at full speed in a random direction (at rest no row beyond the safe
+    # distance can bind: rsvo_env.projection_disk)
+    angle = np.random.default_rng(0).uniform(0.0, 2.0 * np.pi, n)
+    nominal = 2.0 * np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+    rows = flt.filter(x, nominal, theta).rows
     row_bytes = sum(
         getattr(rows, f).nbytes
         for f in ("flat_A", "flat_b", "offsets", "flat_neighbor", "flat_h", "pair_h",

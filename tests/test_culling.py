@@ -17,6 +17,13 @@ def crowd(n, seed):
     return Crowd(num_agents=n, spacing_factor=1.0)._spread(np.random.default_rng(seed))
 
 
+def moving(n, seed, u_max=2.0):
+    """Nominal actions at full speed in random directions: every agent going somewhere (at
+    rest, the filter examines nothing beyond the safe distance, rsvo_env.projection_disk)."""
+    angle = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi, n)
+    return u_max * np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+
+
 def all_pairs_actions(flt, x, nominal, theta):
     cfg = flt.config
     I, J = pairs.all_pairs(len(x))
@@ -39,7 +46,7 @@ def test_culled_equals_all_pairs(n, seed):
 
 def pairs_examined(theta, x):
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0, dt=0.01))
-    return flt.filter(x, np.zeros_like(x), theta).rows.n_pairs
+    return flt.filter(x, moving(len(x), 0), theta).rows.n_pairs
 
 
 def global_radius_pairs(theta, x):

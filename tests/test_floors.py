@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from test_culling import all_pairs_actions, crowd
+from test_culling import all_pairs_actions, crowd, moving
 
 from rsvo_env import pairs
 from rsvo_env.neighbors import DENSE_MAX_AGENTS
@@ -71,7 +71,7 @@ def footprint(theta, x, monkeypatch):
     monkeypatch.setattr(pairs, "weight_matrix", no_matrix)
     monkeypatch.setattr(pairs, "weight_floor", no_matrix)
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0, dt=0.01))
-    res = flt.filter(x, np.zeros_like(x), theta)
+    res = flt.filter(x, moving(len(x), 0), theta)
     rows = res.rows
     row_bytes = sum(
         a.nbytes
