@@ -32,22 +32,38 @@ def env_offsets(positions: NDArray[np.float64], margin: float = 0.0) -> NDArray[
     return shift
 
 
-# Which kernel serves which batch (measured with benchmarks/knn_speed.py, one thread). Insertion
-# costs ~n^2 k with a mispredicted branch per insertion; ranking ~n^3 per env whatever k, without
-# branches; the env-lanes kernel inserts branch-free into all envs at once, vectorised across
-# envs, with a fixed cost per (agent, neighbour, slot) that many envs amortise.
-LANES_MIN_ENVS = 32
+# Which kernel serves which batch (measured with benchmarks/knn_speed.py, one thread, on positions
+# drifting as an env steps them). Insertion costs ~n^2 k with a branch per candidate, which the
+# predictor learns while a step's E n agents are few and their order changes little; ranking
+# ~n^3 per env whatever k, without branches; the env-lanes kernel inserts branch-free into all
+# envs at once, vectorised across envs, with a fixed cost per (agent, neighbour, slot) that only
+# many envs amortise.
+INSERTION_MAX_AGENTS = 512
+LANES_MIN_ENVS = 64
 RANKED_MIN_AGENTS, RANKED_MAX_AGENTS = 8, 32
+
+
+@njit(cache=True)
+def kernel_for(E, n):
+    """The kernel :func:`_knn_dense` runs on E envs of n agents: 0 insertion, 1 ranking, 2 env
+    lanes."""
+    if E * n <= INSERTION_MAX_AGENTS:
+        return 0
+    if E >= LANES_MIN_ENVS:
+        return 2
+    if RANKED_MIN_AGENTS <= n <= RANKED_MAX_AGENTS:
+        return 1
+    return 0
 
 
 @njit(cache=True)
 def _knn_dense(x, k, dist, idx):
     """k nearest of each agent in its env, nearest first; a tie goes to the lower index (the
     order of a stable sort on the squared distance). All three kernels give it bit for bit."""
-    E, n = x.shape[0], x.shape[1]
-    if E >= LANES_MIN_ENVS:
+    kernel = kernel_for(x.shape[0], x.shape[1])
+    if kernel == 2:
         _knn_lanes(x, k, dist, idx)
-    elif RANKED_MIN_AGENTS <= n <= RANKED_MAX_AGENTS:
+    elif kernel == 1:
         _knn_ranked(x, k, dist, idx)
     else:
         _knn_inserted(x, k, dist, idx)

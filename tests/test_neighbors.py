@@ -62,7 +62,9 @@ def test_both_kernels_are_the_stable_sort(seed, e, n, k_share, scale, lattice):
         np.testing.assert_array_equal(d, want_d, err_msg=kernel.__name__)
 
 
-@pytest.mark.parametrize("e", [1, 3, neighbors.LANES_MIN_ENVS - 1, neighbors.LANES_MIN_ENVS])
+@pytest.mark.parametrize(
+    "e", [1, 3, 16, 17, neighbors.LANES_MIN_ENVS - 1, neighbors.LANES_MIN_ENVS]
+)
 @pytest.mark.parametrize("n", [2, 7, 8, 16, 32, 33, 64])
 @pytest.mark.parametrize("k", [1, 3, 4, 6])
 def test_the_public_query_is_the_stable_sort_either_side_of_the_thresholds(e, n, k):
