@@ -23,6 +23,13 @@ ENV_VAR = "RSVO_NUM_THREADS"
 # independent QPs a call below which a parallel launch costs more than the work (measured:
 # benchmarks/results/contention.md, kernel section)
 PARALLEL_THRESHOLD = 256
+# Agents a call from which a kernel's prange form, run on one thread, beats its serial form:
+# numba compiles a prange body as a function of its own whose arrays it marks free of aliasing
+# (parfor lowering), and the compiler then keeps the inner loops' values in registers. On one
+# thread a launch costs about 1 us and waits for no other thread, so it cannot stall under
+# load. Measured for the dense filter pass and the CSR solve (benchmarks/kernel_forms.py):
+# from 1.31x the serial form's time at 6 agents to 0.62x at 4 x 256
+OUTLINED_THRESHOLD = 64
 
 
 def _checked(value: object, name: str) -> int:
@@ -72,5 +79,17 @@ def parallel(work: int) -> bool:
     library's thread count (numba's own count is per calling thread, so it is set here)."""
     if _threads > 1 and work >= PARALLEL_THRESHOLD:
         numba.set_num_threads(_threads)
+        return True
+    return False
+
+
+def outlined(work: int) -> bool:
+    """Whether to call a kernel's prange form over ``work`` agents: in parallel
+    (:func:`parallel`), or on one thread from :data:`OUTLINED_THRESHOLD` agents, where it runs
+    faster than the serial form (numba's count for the calling thread is then set to 1)."""
+    if parallel(work):
+        return True
+    if work >= OUTLINED_THRESHOLD:
+        numba.set_num_threads(1)
         return True
     return False

@@ -71,3 +71,46 @@ def test_parallel_kernels_give_the_serial_results_bit_for_bit():
 
     for a, b in zip(episode(1), episode(POOL), strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_one_thread_takes_the_prange_form_from_its_threshold_on_one_thread():
+    """Over enough agents even one thread calls a kernel's prange form (faster: numba marks
+    its arrays free of aliasing), with numba's count for the thread set to 1, never the pool's."""
+    with threads.using(1):
+        numba.set_num_threads(POOL)
+        assert threads.outlined(threads.OUTLINED_THRESHOLD)
+        assert numba.get_num_threads() == 1
+        assert not threads.outlined(threads.OUTLINED_THRESHOLD - 1)
+        assert not threads.parallel(10**6)
+
+
+@pytest.mark.parametrize(("n", "e"), [(6, 1), (4, 64), (50, 3)])
+def test_the_serial_and_prange_forms_agree_bit_for_bit(n, e):
+    """The dense filter pass and the CSR solve, each form on the same crowd state."""
+    from rsvo_env.solvers import dense, exact
+
+    env = BatchedEnv("crowd", num_envs=e, num_agents=n, safety_filter=True, nominal="move_to_goal")
+    env.reset(seed=2)
+    for _ in range(60):
+        env.step(env.nominal_actions())
+    sim = env.sim
+    flt, s, u = sim.filters[0], sim.state, sim.nominal_controls()
+    bodies = next(iter(flt._default_bodies.values()))
+    args = (s.positions, u, sim.weights.matrix, float(flt.config.gamma), bodies.radii,
+            bodies.lo, bodies.hi)  # fmt: skip
+    rows = flt.apply(s.positions, u, s.theta, None, sim.weights.matrix, with_rows=True).rows
+    nominal, lo, hi, _ = exact._batch(u.reshape(-1, 2), bodies.lo, bodies.hi)
+    csr = (nominal, rows.flat_A, rows.flat_b, rows.offsets, lo, hi)
+    with threads.using(1):
+        numba.set_num_threads(1)
+        for serial, prange, inputs, outputs in (
+            (dense._serial, dense._parallel, args, lambda: dense._outputs(e, n)),
+            (exact._solve_csr_serial, exact._solve_csr_parallel, csr,
+             lambda: exact._batch(nominal, lo, hi)[3]),
+        ):  # fmt: skip
+            a, b = outputs(), outputs()
+            serial(*inputs, *a)
+            prange(*inputs, *b)
+            assert rows.offsets[-1] > 0  # rows to solve: the forms are compared on work
+            for x, y in zip(a, b, strict=True):
+                np.testing.assert_array_equal(x, y)
