@@ -298,7 +298,8 @@ class Simulator:
         if not self.filters:
             return u_nominal, None, np.zeros(u_nominal.shape[:-1])
         u, stats = u_nominal, None
-        vel = s.velocities if self.scenario.model.needs_velocities else None
+        model = self.scenario.model
+        vel = s.velocities if model.needs_velocities else None
         obstacles = s.obstacles if s.obstacles.shape[1] else None
         for flt in self.filters:
             res: FilterResult = flt.apply(
@@ -313,7 +314,7 @@ class Simulator:
                 floor=self._floor(),
                 bodies=self._filter_bodies(flt),
                 obstacles=obstacles,
-                headings=s.headings if self.scenario.model.needs_headings else None,
+                headings=s.headings if model.needs_headings else None,
             )
             u = res.actions
             stats = merge_stats(stats, res)
@@ -335,13 +336,13 @@ class Simulator:
             actions = actions[..., :2]
         u_nominal = self.to_controls(actions)
         u, stats, intervention = self.apply_filters(u_nominal)
-        before = s.positions
-        if sc.model.needs_headings:
-            s.positions, s.headings, s.velocities = sc.model.advance(
+        before, model = s.positions, sc.model
+        if model.needs_headings:
+            s.positions, s.headings, s.velocities = model.advance(
                 s.positions, s.headings, u, self.dt, sc.params
             )
         else:
-            s.positions, s.velocities = sc.model.step(s.positions, s.velocities, u, self.dt)
+            s.positions, s.velocities = model.step(s.positions, s.velocities, u, self.dt)
         after = post_step.fused if self.fused_post_step else post_step.by_hooks
         reward, terminated, truncated = after(self, before, u_nominal, u, stats)
         penalty = sum(self.penalties)
@@ -350,7 +351,7 @@ class Simulator:
         if self.reward_team:
             # each agent also shares its env's mean reward (the reward_team share of it)
             reward = reward + self.reward_team * (reward.mean(-1, keepdims=True) - reward)
-        self.progress.tick(goal_distance(s.positions, s.goals), s.at_goal, self.safety_radius)
+        self.progress.tick(s.positions, s.goals, s.at_goal, self.safety_radius)
         s.no_progress = self.progress.steps.copy()
         signals = self.signals(u_nominal, u, intervention, stats)
         return self.observe(), reward, terminated, truncated, signals
@@ -362,23 +363,28 @@ class Simulator:
     def observe(self, envs: NDArray[np.int64] | None = None) -> NDArray[np.float32]:
         """Observations (E, N, D) of all envs, or of the given ones."""
         s = self.state
-        pick = slice(None) if envs is None else envs
-        frame = s.frame_angle[pick] if self.frame == "goal" else None
+        # all envs: the arrays themselves, as a view of each costs more than it seems at a few
+        # agents (this runs every step)
+        fields = (s.positions, s.velocities, s.goals, s.theta, s.neighbors, s.frame_angle)
+        pick: NDArray[np.int64] | slice = slice(None)
+        if envs is not None:
+            pick = envs
+            fields = tuple(a[envs] for a in fields)
+        x, v, goals, theta, nb, frame = fields
+        frame = frame if self.frame == "goal" else None
         obs = observation.observe(
-            s.positions[pick],
-            s.velocities[pick],
-            s.goals[pick],
-            s.theta[pick],
-            self.weights.neighbors(s.theta, s.weighting, s.neighbors[pick], pick),
-            s.neighbors[pick],
+            x,
+            v,
+            goals,
+            theta,
+            self.weights.neighbors(s.theta, s.weighting, nb, pick),
+            nb,
             frame,
             self.radii,
             None if self.stall is None else self.stall.value(pick),
         )
-        k_o = obstacle_observation.count(s.obstacles.shape[1])
-        if not k_o:
+        if not s.obstacles.shape[1]:
             return obs
-        seen = obstacle_observation.observe(
-            s.positions[pick], self.radii, s.obstacles[pick], frame, k_o
-        )
+        k_o = obstacle_observation.count(s.obstacles.shape[1])
+        seen = obstacle_observation.observe(x, self.radii, s.obstacles[pick], frame, k_o)
         return np.concatenate([obs, seen.astype(np.float32)], axis=-1)

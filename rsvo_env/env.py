@@ -108,7 +108,7 @@ class RSVOParallelEnv(ParallelEnv):
         self.renderer: Renderer | None = None
         self.episode_metrics: dict[str, Any] | None = None
         self._started = False
-        self._info_keys: tuple[str, ...] | None = None
+        self._info_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = None
 
     # ---- what the core holds, seen for one env ----------------------------------------------
     frame = property(lambda self: self.sim.frame)
@@ -209,14 +209,15 @@ class RSVOParallelEnv(ParallelEnv):
         """Per-agent infos: each signal's entry for the agent (vectors as rows of one copy per
         field), then the running episode's flat ``episode_*`` values."""
         if self._info_keys is None:
-            self._info_keys = (*signals, *(f"episode_{name}" for name, _ in FLAT_FIELDS))
-        keys = self._info_keys
-        columns = [list(v[0].copy()) if v.ndim == 3 else v[0].tolist() for v in signals.values()]
-        episode = self.sim.metrics.flat_row(0)
+            self._info_keys = tuple(signals), tuple(f"episode_{k}" for k, _ in FLAT_FIELDS)
+        keys, episode_keys = self._info_keys
+        # tolist()[0], not [0].tolist(): no view made per field
+        columns = [list(v[0].copy()) if v.ndim == 3 else v.tolist()[0] for v in signals.values()]
+        episode = dict(zip(episode_keys, self.sim.metrics.flat_row(0), strict=True))
         # every column has one entry per agent: zip needs no length check
         rows = zip(*columns, strict=False)
         return {
-            a: dict(zip(keys, vals + episode, strict=False))
+            a: {**dict(zip(keys, vals, strict=False)), **episode}
             for a, vals in zip(self.possible_agents, rows, strict=False)
         }
 

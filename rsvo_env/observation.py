@@ -136,36 +136,55 @@ if _KERNEL_LAYOUT != tuple(tuple(x for f in t for x in (f.name, f.width)) for t 
     raise ImportError("observation tables and the observation kernel disagree")
 
 
-@njit(cache=True)
-def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, own, out):
+@njit(cache=True, inline="always")
+def _fill(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, own, out):
+    # every value read into a local before the first write: the compiler cannot tell that
+    # ``out`` shares no memory with the inputs, and would read them again after each write
     E, n, K = nb.shape
     for e in range(E):
         for i in range(n):
             c, s = 1.0, 0.0
             if use_frame:
                 c, s = np.cos(-frame_angle[e, i]), np.sin(-frame_angle[e, i])
-            gx, gy = goals[e, i, 0] - x[e, i, 0], goals[e, i, 1] - x[e, i, 1]
+            xi, yi, ri = x[e, i, 0], x[e, i, 1], radii[i]
+            gx, gy = goals[e, i, 0] - xi, goals[e, i, 1] - yi
             vx, vy = v[e, i, 0], v[e, i, 1]
+            th, clock = theta[e, i], stall[e, i]
             o = out[e, i]
             o[0], o[1] = c * gx - s * gy, s * gx + c * gy
             o[2], o[3] = c * vx - s * vy, s * vx + c * vy
-            o[4] = theta[e, i]
+            o[4] = th
             if own > 5:
-                o[5] = stall[e, i]
+                o[5] = clock
             for k in range(K):
                 j = nb[e, i, k]
-                px, py = x[e, j, 0] - x[e, i, 0], x[e, j, 1] - x[e, i, 1]
+                px, py = x[e, j, 0] - xi, x[e, j, 1] - yi
                 qx, qy = v[e, j, 0] - vx, v[e, j, 1] - vy
-                hx, hy = goals[e, j, 0] - x[e, i, 0], goals[e, j, 1] - x[e, i, 1]
+                hx, hy = goals[e, j, 0] - xi, goals[e, j, 1] - yi
+                w, tj, R = omega[e, i, k], theta[e, j], ri + radii[j]
                 b = own + 10 * k
                 rx, ry = c * px - s * py, s * px + c * py
                 o[b], o[b + 1] = rx, ry
                 o[b + 2], o[b + 3] = c * qx - s * qy, s * qx + c * qy
                 o[b + 4], o[b + 5] = c * hx - s * hy, s * hx + c * hy
-                o[b + 6] = omega[e, i, k]
-                o[b + 7] = theta[e, j]
-                o[b + 8] = np.sqrt(rx * rx + ry * ry) - (radii[i] + radii[j])
+                o[b + 6] = w
+                o[b + 7] = tj
+                o[b + 8] = np.sqrt(rx * rx + ry * ry) - R
                 o[b + 9] = 1.0
+
+
+# One kernel per width of the own features, each inlining ``_fill`` with ``own`` a constant: the
+# neighbours' blocks at fixed offsets compile to faster stores (16 x 32 agents: 12.5 against
+# 16 us a call, one thread)
+@njit(cache=True)
+def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, out):
+    _fill(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, OWN_WIDTH, out)
+
+
+@njit(cache=True)
+def _observe_clock(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, out):
+    _fill(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, OWN_WIDTH + 1,
+          out)  # fmt: skip
 
 
 def observe(
@@ -188,9 +207,9 @@ def observe(
     out = np.empty((E, n, size(K, stall is not None)), dtype=np.float32)
     use_frame = frame_angle is not None
     angle = frame_angle if use_frame else np.zeros((E, n))
-    clock = np.zeros((E, n)) if stall is None else stall
+    clock = angle if stall is None else stall  # without a clock, an (E, N) array left unread
     # the kernel indexes any layout: no contiguous copies
-    _observe(
+    (_observe if stall is None else _observe_clock)(
         positions,
         velocities,
         goals,
@@ -201,7 +220,6 @@ def observe(
         use_frame,
         np.ascontiguousarray(radii, dtype=np.float64),
         clock,
-        OWN_WIDTH + int(stall is not None),  # where the neighbours' blocks begin
         out,
     )
     return out

@@ -10,6 +10,7 @@ state, whose arrays are (E, N, ...), and answers for all envs at once.
 
 from __future__ import annotations
 
+import functools
 from typing import Any, ClassVar
 
 import numpy as np
@@ -149,15 +150,16 @@ class Scenario:
         return low_high
 
     # -- parameters the env reads -------------------------------------------------------------
-    @property
+    @functools.cached_property
     def model(self) -> Dynamics:
-        """The dynamics model (``dynamics`` names it; looked up once a name, as the step asks
+        """The dynamics model (``dynamics`` names it; looked up once a name, as every step asks
         several times)."""
-        kept = self.__dict__.get("_model")
-        if kept is None or kept[0] != self.dynamics:
-            model = dynamics.get(self.dynamics, f"{self.name}.dynamics")
-            kept = self._model = (self.dynamics, model)
-        return kept[1]
+        return dynamics.get(self.dynamics, f"{self.name}.dynamics")
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name == "dynamics":  # a new model: looked up again on first use
+            self.__dict__.pop("model", None)
+        super().__setattr__(name, value)
 
     @property
     def limit_name(self) -> str:

@@ -48,7 +48,9 @@ def test_the_clock_counts_the_steps_since_the_last_progress_in_any_unit(seed, sc
     clock = StallClock.create(4, 1, n)
     clock.reset(np.array([0]), distances[:1])
     for t in range(T):
-        clock.tick(distances[t + 1][None], at_goal[t][None], 1.0 * scale)
+        # on the x axis, goals at the origin: the distance is x exactly (sqrt of a square)
+        x = np.stack([distances[t + 1], np.zeros(n)], axis=-1)[None]
+        clock.tick(x, np.zeros_like(x), at_goal[t][None], 1.0 * scale)
         np.testing.assert_array_equal(clock.steps[0], want[t])
         np.testing.assert_array_equal(clock.value()[0], want[t] / 4)
     assert want.max() > 0 and (want == 0).any()  # the walk both stalls and progresses
