@@ -351,8 +351,7 @@ class Simulator:
         if self.reward_team:
             # each agent also shares its env's mean reward (the reward_team share of it)
             reward = reward + self.reward_team * (reward.mean(-1, keepdims=True) - reward)
-        self.progress.tick(s.positions, s.goals, s.at_goal, self.safety_radius)
-        s.no_progress = self.progress.steps.copy()
+        s.no_progress = self.progress.steps.copy()  # the after stage advanced the clock
         signals = self.signals(u_nominal, u, intervention, stats)
         return self.observe(), reward, terminated, truncated, signals
 
@@ -372,16 +371,18 @@ class Simulator:
             fields = tuple(a[envs] for a in fields)
         x, v, goals, theta, nb, frame = fields
         frame = frame if self.frame == "goal" else None
+        omega, by_index = self.weights.neighbors(s.theta, s.weighting, nb, envs)
         obs = observation.observe(
             x,
             v,
             goals,
             theta,
-            self.weights.neighbors(s.theta, s.weighting, nb, pick),
+            omega,
             nb,
             frame,
             self.radii,
             None if self.stall is None else self.stall.value(pick),
+            by_index,
         )
         if not s.obstacles.shape[1]:
             return obs

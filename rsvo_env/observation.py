@@ -137,7 +137,8 @@ if _KERNEL_LAYOUT != tuple(tuple(x for f in t for x in (f.name, f.width)) for t 
 
 
 @njit(cache=True, inline="always")
-def _fill(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, own, out):
+def _fill(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall, own,
+          out):  # fmt: skip
     # every value read into a local before the first write: the compiler cannot tell that
     # ``out`` shares no memory with the inputs, and would read them again after each write
     E, n, K = nb.shape
@@ -161,7 +162,8 @@ def _fill(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, o
                 px, py = x[e, j, 0] - xi, x[e, j, 1] - yi
                 qx, qy = v[e, j, 0] - vx, v[e, j, 1] - vy
                 hx, hy = goals[e, j, 0] - xi, goals[e, j, 1] - yi
-                w, tj, R = omega[e, i, k], theta[e, j], ri + radii[j]
+                w = omega[e, i, j] if by_index else omega[e, i, k]
+                tj, R = theta[e, j], ri + radii[j]
                 b = own + 10 * k
                 rx, ry = c * px - s * py, s * px + c * py
                 o[b], o[b + 1] = rx, ry
@@ -177,14 +179,16 @@ def _fill(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, o
 # neighbours' blocks at fixed offsets compile to faster stores (16 x 32 agents: 12.5 against
 # 16 us a call, one thread)
 @njit(cache=True)
-def _observe(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, out):
-    _fill(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, OWN_WIDTH, out)
+def _observe(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall, out):
+    _fill(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall,
+          OWN_WIDTH, out)  # fmt: skip
 
 
 @njit(cache=True)
-def _observe_clock(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, out):
-    _fill(x, v, goals, theta, omega, nb, frame_angle, use_frame, radii, stall, OWN_WIDTH + 1,
-          out)  # fmt: skip
+def _observe_clock(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall,
+                   out):  # fmt: skip
+    _fill(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall,
+          OWN_WIDTH + 1, out)  # fmt: skip
 
 
 def observe(
@@ -197,9 +201,11 @@ def observe(
     frame_angle: NDArray[np.float64] | None,
     radii: NDArray[np.float64],
     stall: NDArray[np.float64] | None = None,
+    by_index: bool = False,
 ) -> NDArray[np.float32]:
     """Observations (E, N, D) float32 of E envs; ``neighbors`` (E, N, K) are local indices and
-    ``neighbor_omega`` (E, N, K) each agent's weight against them. ``frame_angle`` (E, N)
+    ``neighbor_omega`` (E, N, K) each agent's weight against them, or with ``by_index`` the
+    weight matrices (E, N, N), read at the neighbours' indices. ``frame_angle`` (E, N)
     rotates into each agent's goal frame (None: world frame); ``radii`` (N,) the body radii (a
     neighbour's ``gap`` is the centre distance less ``r_i + r_j``); ``stall`` (E, N): the stall
     clock, observed when given."""
@@ -215,6 +221,7 @@ def observe(
         goals,
         theta,
         neighbor_omega,
+        by_index,
         neighbors,
         angle,
         use_frame,

@@ -2,7 +2,8 @@
 
 After the positions move, the step derives the nearest distance, the K nearest neighbours, who
 is at its goal and whom the right-hand rule turns; records the step in the episode metrics;
-marks first arrivals; computes the reward terms and which envs terminated. For a scenario with
+marks first arrivals; computes the reward terms and which envs terminated; advances the stall
+clock (``rsvo_env.stall``). For a scenario with
 the base hooks (``Scenario.at_goal``, ``right_hand_active``, ``reward``) and few agents all of it
 is one compiled call of the same kernels (:func:`fused`), so a small env pays one dispatch
 instead of a dozen; otherwise the hooks are called in turn (:func:`by_hooks`). Both give the
@@ -23,6 +24,7 @@ from rsvo_env.neighbors import DENSE_MAX_AGENTS, _knn_dense_new, nearest_neighbo
 from rsvo_env.nominal import right_hand_active
 from rsvo_env.planar import _within
 from rsvo_env.scenario import Scenario, _reward_terms
+from rsvo_env.stall import PROGRESS, _tick
 
 if TYPE_CHECKING:
     from rsvo_env.core import Simulator
@@ -62,7 +64,8 @@ def by_hooks(
     sim: Simulator, before: NDArray, requested: NDArray, applied: NDArray, stats: Any
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
     """The after-integration stage through the scenario's hooks: reward (E, N), terminated
-    (every agent at its goal) and truncated (not terminated, and the step limit reached)."""
+    (every agent at its goal) and truncated (not terminated, and the step limit reached); the
+    stall clock advanced."""
     s = sim.state
     derive(sim)
     at_goal = s.at_goal
@@ -74,6 +77,7 @@ def by_hooks(
         at_goal, s.reached, sim.metrics.counts, sim.max_steps
     )
     reward = sim.scenario.reward(before, s.positions, s.goals, first_arrival, sim.reward_weights)
+    sim.progress.tick(s.positions, s.goals, at_goal, sim.safety_radius)
     return reward, terminated, truncated
 
 
@@ -97,26 +101,32 @@ def _episode_end(at_goal, reached, counts, max_steps):
 @njit(cache=True)
 def _fused(x, before, goals, starts, reached, k, tol, rh_on, trigger, weights, counts,
            min_distance, infeasible, sums, arrival, min_barrier, applied, requested, feasible,
-           min_h, dt, collision_below, series, max_steps):  # fmt: skip
-    """:func:`by_hooks` with the base hooks, as one compiled pass of the same kernels."""
+           min_h, dt, collision_below, series, max_steps, margin, best, stalled_steps,
+           nearest, neighbors, at_goal, rh, reward, terminated, truncated):  # fmt: skip
+    """:func:`by_hooks` with the base hooks, as one compiled pass of the same kernels, into the
+    given outputs (allocated by the caller: arrays a compiled call returns cost more each)."""
     E, n = x.shape[0], x.shape[1]
     dist, idx = _knn_dense_new(x, max(k, 1))
-    nearest = dist[:, :, 0].copy()
-    neighbors = idx[:, :, :k].copy()
-    at_goal = _within(x, goals, tol)
+    for e in range(E):
+        for i in range(n):
+            nearest[e, i] = dist[e, i, 0]
+            for c in range(k):
+                neighbors[e, i, c] = idx[e, i, c]
+    at_goal[:] = _within(x, goals, tol)
     if rh_on:
-        rh = right_hand_active(nearest, at_goal, trigger)
+        rh[:] = right_hand_active(nearest, at_goal, trigger)
     else:
-        rh = np.zeros((E, n), dtype=np.bool_)
+        rh[:] = False
     _accumulate(counts, min_distance, infeasible, sums, arrival, min_barrier, before, x, starts,
                 goals, applied, requested, nearest, rh, at_goal, feasible, min_h, dt,
                 collision_below, series, nearest)  # fmt: skip
-    first, terminated, truncated = _episode_end(at_goal, reached, counts, max_steps)
-    reward = np.empty((E, n))
+    first, term, trunc = _episode_end(at_goal, reached, counts, max_steps)
+    terminated[:] = term
+    truncated[:] = trunc
     _reward_terms(before.reshape(-1, 2), x.reshape(-1, 2), goals.reshape(-1, 2),
                   first.reshape(-1), weights[0], weights[1], weights[2],
                   reward.reshape(-1))  # fmt: skip
-    return nearest, neighbors, at_goal, rh, reward, terminated, truncated
+    _tick(x, goals, at_goal, margin, best, stalled_steps)
 
 
 def fused(
@@ -127,7 +137,11 @@ def fused(
     feasible, min_h = m.begin(stats)
     p = sc.params
     rh_on = p["deadlock_resolution"] == "right_hand"
-    s.nearest, s.neighbors, s.at_goal, s.rh_active, reward, terminated, truncated = _fused(
+    E, n = s.at_goal.shape
+    out = (np.empty((E, n)), np.empty((E, n, sim.k), dtype=np.int64),
+           np.empty((E, n), dtype=np.bool_), np.empty((E, n), dtype=np.bool_), np.empty((E, n)),
+           np.empty(E, dtype=np.bool_), np.empty(E, dtype=np.bool_))  # fmt: skip
+    _fused(
         np.ascontiguousarray(s.positions),
         np.ascontiguousarray(before),
         np.ascontiguousarray(s.goals),
@@ -152,6 +166,11 @@ def fused(
         m.collision_below,
         m.step_series,
         sim.max_steps,
+        PROGRESS * sim.safety_radius,
+        sim.progress.best,
+        sim.progress.steps,
+        *out,
     )
     m.end()
+    s.nearest, s.neighbors, s.at_goal, s.rh_active, reward, terminated, truncated = out
     return reward, terminated, truncated

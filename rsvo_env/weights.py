@@ -12,7 +12,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env.pairs import Floor, floor_of, weight_floor
@@ -28,16 +27,6 @@ from rsvo_env.responsibility import (
 
 # Agents an env up to which the weight matrix is kept (8 MB per env at 1,024).
 DENSE_MAX = 1024
-
-
-@njit(cache=True)
-def _gather(matrix, nb, out):
-    """``out[e, i, k] = matrix[e, i, nb[e, i, k]]`` (a take_along_axis without its set-up)."""
-    E, n, K = nb.shape
-    for e in range(E):
-        for i in range(n):
-            for k in range(K):
-                out[e, i, k] = matrix[e, i, nb[e, i, k]]
 
 
 class Weights:
@@ -86,20 +75,27 @@ class Weights:
         return self.matrix[e] if self.matrix is not None else weight_matrix(theta, mode)
 
     def neighbors(
-        self, theta: NDArray, modes: Sequence[Weighting], nb: NDArray[np.int64], pick=slice(None)
-    ) -> NDArray[np.float64]:
-        """(E', N, K) weight of each agent against each of its listed neighbours ``nb`` (local
-        indices) in envs ``pick``: entries of the matrix, or the same numbers from the scores."""
+        self,
+        theta: NDArray,
+        modes: Sequence[Weighting],
+        nb: NDArray[np.int64],
+        envs: NDArray[np.int64] | None = None,
+    ) -> tuple[NDArray[np.float64], bool]:
+        """Each agent's weight against each of its listed neighbours ``nb`` (E', N, K, local
+        indices) in ``envs`` (None: all), as the observation reads it: the matrices (E', N, N)
+        themselves, to be read at the neighbours' indices (``True``; no gathered copy made),
+        or, where no matrix is kept, the weights (E', N, K) from the scores, the same numbers
+        (``False``)."""
         if self.matrix is not None:
-            out = np.empty(nb.shape)
-            _gather(self.matrix[pick], nb, out)
-            return out
+            return (self.matrix if envs is None else self.matrix[envs]), True
+        pick = slice(None) if envs is None else envs
         th = theta[pick]
         tj = np.take_along_axis(th[:, None, :], nb, axis=2)
         ti = np.broadcast_to(th[:, :, None], nb.shape)
         above = nb > np.arange(self.n)[None, :, None]
         sym = symmetric_envs(modes)[pick][:, None, None]
-        return np.where(above, scored_weight(ti, tj, sym), 1.0 - scored_weight(tj, ti, sym))
+        weights = np.where(above, scored_weight(ti, tj, sym), 1.0 - scored_weight(tj, ti, sym))
+        return weights, False
 
     def floor(self, theta: NDArray, modes: Sequence[Weighting]) -> Floor:
         """The floor of the large-N pair search (:mod:`rsvo_env.pairs`), once per change: from
