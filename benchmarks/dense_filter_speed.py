@@ -27,7 +27,7 @@ from rsvo_env.scenarios import Crowd
 from rsvo_env.solvers import dense
 
 ROOT = Path(__file__).resolve().parents[1]
-SIZES = (32, 64, 100, 150, 200, 256, 350, 512)
+SIZES = (32, 64, 100, 150, 200, 256, 300, 350, 512)
 DT = 0.05
 
 

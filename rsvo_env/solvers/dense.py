@@ -19,8 +19,10 @@ from rsvo_env.projection_disk import disk_support
 from rsvo_env.solvers.exact import solve_rows
 
 # Up to this many agents an env, examining every pair here costs less than the general path's
-# pair search, row packing and batched solve (measured: benchmarks/dense_filter_speed.py).
-MAX_AGENTS = 350
+# pair search, row packing and batched solve (measured: benchmarks/dense_filter_speed.py). With
+# equal scores, the scenarios' default, the two break even at 256; with scores spread over
+# 1..10 the general path's wider search lets the dense pass win up to about 450.
+MAX_AGENTS = 256
 
 
 @njit(cache=True, inline="always")
