@@ -10,8 +10,8 @@ Settings: ``default`` (nothing set: the library's thread policy, ``docs/threads.
 before). Each process warms up, then counts agent-steps for a fixed wall time; the aggregate is
 their sum. Rounds alternate the settings' order; the reference (one process,
 ``RSVO_NUM_THREADS=1 NUMBA_NUM_THREADS=1``) runs in every round, and each ratio is taken against
-its own round's reference. Also the kernel threshold: one solve of n independent QPs, serial and
-parallel, in one process (``PARALLEL_THRESHOLD``).
+its own round's reference. Also the kernel threshold: one solve of n independent QPs, one thread and
+two, in one process (``PARALLEL_THRESHOLD``).
 
 Writes ``benchmarks/results/contention.md``.
 
@@ -81,8 +81,9 @@ def settings() -> dict[str, dict[str, str]]:
 
 
 def kernel_threshold(sizes=(64, 128, 256, 512, 1024, 4096), repeats: int = 200) -> list[tuple]:
-    """Microseconds of one solve of n QPs (8 rows each), serial and with the pool (forced at
-    every n: the threshold lowered to 0 for the measurement)."""
+    """Microseconds of one solve of n QPs (8 rows each), on one thread (the form the library
+    takes for n there, ``docs/threads.md``) and with the pool (forced at every n: the threshold
+    lowered to 0 for the measurement)."""
     from rsvo_env import threads
     from rsvo_env.solvers import exact
 
@@ -166,12 +167,12 @@ def write(path: Path, results: dict, kernel: list[tuple], args) -> None:
         "",
         "## Kernel threshold",
         "",
-        f"One `exact.solve_csr` of n QPs of 8 rows, microseconds, serial against {CORES}"
+        f"One `exact.solve_csr` of n QPs of 8 rows, microseconds, one thread against {CORES}"
         " threads, in one process (the parallel kernel below its threshold forced for the"
         " measurement). The library goes parallel (when given threads) from"
         " `PARALLEL_THRESHOLD` = 256.",
         "",
-        f"| n | serial [us] | {CORES} threads [us] | parallel / serial |",
+        f"| n | one thread [us] | {CORES} threads [us] | {CORES} threads / one |",
         "|---|---|---|---|",
     ]
     for n, serial, par in kernel:

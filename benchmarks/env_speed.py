@@ -9,13 +9,14 @@
    numpy work every step must do at least (x += dt u and one dense nearest-neighbour query;
    ``single_env_speed.py``, run in a process of its own so that VMAS's torch threads are not
    beside it; the ratio is within that process).
-3. The same single-env ratio at N = 6 of the library as of ``--baseline`` (by default the last
-   commit before the batch-first core), timed in its own process against the same reference.
+3. The same single-env ratio at N = 6 of the library as of each ``--baseline`` (by default the
+   last commit before the batch-first core, and the commit at which the speed issue was filed),
+   timed in its own process against the same reference.
 
 Each figure is the best of ``--repeats`` alternating bursts (this machine's speed drifts).
 Writes ``benchmarks/results/env_speed.md``.
 
-    python benchmarks/env_speed.py [--seconds 1] [--repeats 5] [--baseline REV|none]
+    python benchmarks/env_speed.py [--seconds 1] [--repeats 5] [--baseline REV ...|none]
 """
 
 from __future__ import annotations
@@ -38,7 +39,8 @@ from rsvo_env.vector import BatchedEnv
 ROOT = Path(__file__).resolve().parents[1]
 BATCH_SIZES = ((4, 256), (16, 32), (16, 256), (64, 32))
 # the last commit before the batch-first core: "today" for the single env's speed-up
-BASELINE = "a2df9b8"
+# revisions the single env at N = 6 is compared with, and what each was
+BASELINES = {"a2df9b8": "before the batch-first core", "dc09414": "when issue 25 was filed"}
 
 
 def batched(n: int, e: int, seen: dict) -> tuple[Callable, int]:
@@ -115,9 +117,10 @@ def baseline_section(rev: str, now: dict[str, float], seconds: float, repeats: i
     """The single env at N = 6, then (``rev``) and now, each against the reference timed in its
     own process."""
     then = baseline_rates(rev, seconds, repeats)
+    what = BASELINES.get(rev, "an earlier library")
     lines = [
         "",
-        f"## Single env at N = 6: before the batch-first core (commit `{rev}`) and now",
+        f"## Single env at N = 6: {what} (commit `{rev}`) and now",
         "",
         f"The library as of `{rev}` (a detached worktree, in its own process) and this checkout,"
         " each timed against the same frozen reference in its own process; the multiple is of"
@@ -128,7 +131,7 @@ def baseline_section(rev: str, now: dict[str, float], seconds: float, repeats: i
     ]
     for name, label in (("bare", "bare env"), ("filtered", "filtered (RCBFSafetyFilter)")):
         a, b = then[name] / then["reference"], now[name] / now["reference"]
-        lines.append(f"| {label} | {a:.3f} | {b:.3f} | {b / a:.1f}x |")
+        lines.append(f"| {label} | {a:.3f} | {b:.3f} | {b / a:.2f}x |")
         print(lines[-1], flush=True)
     return lines
 
@@ -139,8 +142,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=5, help="bursts per benchmark")
     ap.add_argument(
         "--baseline",
-        default=BASELINE,
-        help="git revision whose single env is timed against the same reference ('none': skip)",
+        nargs="+",
+        default=list(BASELINES),
+        help="git revisions whose single env is timed against the same reference ('none': skip)",
     )
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "env_speed.md")
     args = ap.parse_args(argv)
@@ -208,8 +212,8 @@ def main(argv: list[str] | None = None) -> int:
                 f"{r['reference']:,.0f} | {r[name] / r['reference']:.3f} |"
             )
             print(lines[-1], flush=True)
-    if args.baseline != "none":
-        lines += baseline_section(args.baseline, now[6], args.seconds, args.repeats)
+    for rev in () if args.baseline == ["none"] else args.baseline:
+        lines += baseline_section(rev, now[6], args.seconds, args.repeats)
     lines.append("")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text("\n".join(lines))

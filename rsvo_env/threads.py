@@ -27,8 +27,9 @@ PARALLEL_THRESHOLD = 256
 # numba compiles a prange body as a function of its own whose arrays it marks free of aliasing
 # (parfor lowering), and the compiler then keeps the inner loops' values in registers. On one
 # thread a launch costs about 1 us and waits for no other thread, so it cannot stall under
-# load. Measured for the dense filter pass and the CSR solve (benchmarks/kernel_forms.py):
-# from 1.31x the serial form's time at 6 agents to 0.62x at 4 x 256
+# load. Measured for the dense filter pass and the CSR solve (benchmarks/kernel_forms.py): the
+# prange form takes 1.35x the serial form's time at 6 agents, 1.10x at 32, 0.61x to 0.99x from
+# 48 on
 OUTLINED_THRESHOLD = 64
 
 
