@@ -65,10 +65,6 @@ class StallClock:
         """The observed clock (E, N) (of ``envs``): steps stalled over ``unit``."""
         return self.steps[envs] / self.unit
 
-    def stalled(self, window: int, at_goal: NDArray[np.bool_]) -> NDArray[np.bool_]:
-        """(E, N) agents short of their goals with no progress for ``window`` steps or more."""
-        return stalled(self.steps, window, at_goal)
-
     def bound(self, max_steps: int) -> float:
         """The largest value an episode of ``max_steps`` steps can show."""
         return max_steps / self.unit
