@@ -13,8 +13,9 @@ that has its cores to itself opts in: ``RSVO_NUM_THREADS=2`` in the environment,
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any
 
 import numba
 import numpy as np
@@ -84,13 +85,20 @@ def parallel(work: int) -> bool:
     return False
 
 
-def outlined(work: int) -> bool:
-    """Whether to call a kernel's prange form over ``work`` agents: in parallel
-    (:func:`parallel`), or on one thread from :data:`OUTLINED_THRESHOLD` agents, where it runs
-    faster than the serial form (numba's count for the calling thread is then set to 1)."""
-    if parallel(work):
-        return True
-    if work >= OUTLINED_THRESHOLD:
-        numba.set_num_threads(1)
-        return True
-    return False
+def launch(serial: Callable, prange: Callable, work: int, *args: Any) -> Any:
+    """Call the form of a kernel that pays over ``work`` agents: its ``prange`` form on the
+    library's threads in parallel (:func:`parallel`'s rule) or on one thread from
+    :data:`OUTLINED_THRESHOLD` agents (faster than the plain loop there), else ``serial``.
+    numba's thread count for the calling thread, which a user's own kernels read, is set for
+    the launch only and put back after it."""
+    n = _threads if _threads > 1 and work >= PARALLEL_THRESHOLD else int(work >= OUTLINED_THRESHOLD)
+    if not n:
+        return serial(*args)
+    caller = numba.get_num_threads()
+    if caller == n:
+        return prange(*args)
+    numba.set_num_threads(n)
+    try:
+        return prange(*args)
+    finally:
+        numba.set_num_threads(caller)

@@ -75,13 +75,41 @@ def test_parallel_kernels_give_the_serial_results_bit_for_bit():
 
 def test_one_thread_takes_the_prange_form_from_its_threshold_on_one_thread():
     """Over enough agents even one thread calls a kernel's prange form (faster: numba marks
-    its arrays free of aliasing), with numba's count for the thread set to 1, never the pool's."""
+    its arrays free of aliasing), launched with one thread; the plain loop below that."""
+    seen = []
+
+    def serial() -> str:
+        return "serial"
+
+    def prange() -> str:
+        seen.append(numba.get_num_threads())
+        return "prange"
+
     with threads.using(1):
-        numba.set_num_threads(POOL)
-        assert threads.outlined(threads.OUTLINED_THRESHOLD)
-        assert numba.get_num_threads() == 1
-        assert not threads.outlined(threads.OUTLINED_THRESHOLD - 1)
-        assert not threads.parallel(10**6)
+        assert threads.launch(serial, prange, threads.OUTLINED_THRESHOLD) == "prange"
+        assert threads.launch(serial, prange, threads.OUTLINED_THRESHOLD - 1) == "serial"
+        assert threads.launch(serial, prange, 10**6) == "prange"
+    if POOL > 1:
+        with threads.using(2):
+            assert threads.launch(serial, prange, threads.PARALLEL_THRESHOLD) == "prange"
+    assert seen == [1, 1] + ([2] if POOL > 1 else [])
+
+
+def test_a_step_leaves_the_callers_numba_thread_count_as_it_was():
+    """Each launch sets the count for itself only: a user's own parallel code in the same
+    thread keeps the count it set, whichever form or thread count the step took."""
+    env = BatchedEnv("crowd", num_envs=64, num_agents=4, safety_filter=True, nominal="move_to_goal")
+    env.reset(seed=1)
+    before = numba.get_num_threads()
+    try:
+        for count in sorted({1, POOL}):
+            numba.set_num_threads(count)
+            for n_threads in sorted({1, POOL}):
+                with threads.using(n_threads):
+                    env.step(env.nominal_actions())  # 256 agents: a prange form every time
+                assert numba.get_num_threads() == count
+    finally:
+        numba.set_num_threads(before)
 
 
 @pytest.mark.parametrize(("n", "e"), [(6, 1), (4, 64), (50, 3)])
@@ -102,7 +130,6 @@ def test_the_serial_and_prange_forms_agree_bit_for_bit(n, e):
     nominal, lo, hi, _ = exact._batch(u.reshape(-1, 2), bodies.lo, bodies.hi)
     csr = (nominal, rows.flat_A, rows.flat_b, rows.offsets, lo, hi)
     with threads.using(1):
-        numba.set_num_threads(1)
         for serial, prange, inputs, outputs in (
             (dense._serial, dense._parallel, args, lambda: dense._outputs(e, n)),
             (exact._solve_csr_serial, exact._solve_csr_parallel, csr,
@@ -110,7 +137,7 @@ def test_the_serial_and_prange_forms_agree_bit_for_bit(n, e):
         ):  # fmt: skip
             a, b = outputs(), outputs()
             serial(*inputs, *a)
-            prange(*inputs, *b)
+            threads.launch(serial, prange, 10**6, *inputs, *b)  # its prange form, one thread
             assert rows.offsets[-1] > 0  # rows to solve: the forms are compared on work
             for x, y in zip(a, b, strict=True):
                 np.testing.assert_array_equal(x, y)

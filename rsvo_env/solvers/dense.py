@@ -144,9 +144,6 @@ def filter_dense(
     """
     E, n = positions.shape[:2]
     outputs = _outputs(E, n)
-    # the choice made here, not in compiled code: a parallel kernel called from another
-    # compiled function runs many times slower
-    kernel = _parallel if threads.outlined(E * n) else _serial
     args = (
         np.ascontiguousarray(positions, dtype=np.float64),
         np.ascontiguousarray(nominal, dtype=np.float64),
@@ -157,5 +154,7 @@ def filter_dense(
         _flat(hi, (E * n, 2)),
         *outputs,
     )
-    kernel(*args)
+    # the form chosen here, not in compiled code: a parallel kernel called from another
+    # compiled function runs many times slower
+    threads.launch(_serial, _parallel, E * n, *args)
     return outputs

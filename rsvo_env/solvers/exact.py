@@ -272,8 +272,8 @@ def solve_csr(
     rows ``A[offsets[i]:offsets[i + 1]]`` (R, 2), ``b`` (R,); the scratch space is the widest
     agent's, once per thread, so memory follows the rows, not n times the widest."""
     nominal, lo, hi, outputs = _batch(nominal, lo, hi)
-    kernel = _solve_csr_parallel if threads.outlined(len(nominal)) else _solve_csr_serial
-    kernel(
+    threads.launch(
+        _solve_csr_serial, _solve_csr_parallel, len(nominal),
         nominal, np.ascontiguousarray(A, dtype=np.float64).reshape(-1, 2),
         np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.int64),
         lo, hi, *outputs,
