@@ -79,10 +79,15 @@ def using(n: int) -> Iterator[None]:
 def parallel(work: int) -> bool:
     """Whether a kernel over ``work`` independent problems runs in parallel, and if so with the
     library's thread count (numba's own count is per calling thread, so it is set here)."""
-    if _threads > 1 and work >= PARALLEL_THRESHOLD:
+    if _in_parallel(work):
         numba.set_num_threads(_threads)
         return True
     return False
+
+
+def _in_parallel(work: int) -> bool:
+    """The one rule for running in parallel: opted in, and enough independent problems."""
+    return _threads > 1 and work >= PARALLEL_THRESHOLD
 
 
 def launch(serial: Callable, prange: Callable, work: int, *args: Any) -> Any:
@@ -91,7 +96,7 @@ def launch(serial: Callable, prange: Callable, work: int, *args: Any) -> Any:
     :data:`OUTLINED_THRESHOLD` agents (faster than the plain loop there), else ``serial``.
     numba's thread count for the calling thread, which a user's own kernels read, is set for
     the launch only and put back after it."""
-    n = _threads if _threads > 1 and work >= PARALLEL_THRESHOLD else int(work >= OUTLINED_THRESHOLD)
+    n = _threads if _in_parallel(work) else int(work >= OUTLINED_THRESHOLD)
     if not n:
         return serial(*args)
     caller = numba.get_num_threads()
