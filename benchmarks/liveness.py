@@ -113,8 +113,9 @@ def crowds(sizes, seeds, cap, weighting: str = "asymmetric") -> list[dict]:
     return rows
 
 
-def circular(sizes, cap) -> list[dict]:
-    """The circular swap, ours, alternating theta (2, 1, 2, 1, ...), both weightings."""
+def circular(sizes, cap, nominal: str = "rorca") -> list[dict]:
+    """The circular swap under the scripted controller ``nominal``, alternating theta
+    (2, 1, 2, 1, ...), both weightings."""
     rows = []
     for n in sizes:
         theta = [2.0 if i % 2 == 0 else 1.0 for i in range(n)]
@@ -122,26 +123,34 @@ def circular(sizes, cap) -> list[dict]:
         out = {}
         for weighting in ("asymmetric", "symmetric"):
             r = ours(n, 0, cap, "circular_swap", theta=theta, circle_radius=radius,
-                     weighting=weighting, dt=0.01)  # fmt: skip
+                     weighting=weighting, dt=0.01, nominal=nominal)  # fmt: skip
             egoist = np.array(theta) < max(theta)
             out[weighting] = r
             out[weighting + "_ego"] = float(r["arrival"][egoist].mean())
             out[weighting + "_alt"] = float(r["arrival"][~egoist].mean())
-            out[weighting + "_rotated"] = rotated(n, theta, radius, weighting, cap)
-        rows.append({"n": n, **out})
+            out[weighting + "_rotated"] = rotated(n, theta, radius, weighting, cap, nominal)
+        rows.append({"n": n, "nominal": nominal, **out})
         print("circular", n, out["asymmetric"]["makespan"], out["symmetric"]["makespan"],
               flush=True)  # fmt: skip
     return rows
 
 
-def rotated(n: int, theta: list, radius: float, weighting: str, cap: int) -> dict:
+def circular_runs(sizes) -> list[dict]:
+    """R-ORCA's circular swaps of ``sizes``, then the paper's own 6-agent game under the
+    paper's controller (move-to-goal with the right-hand rule) as the reference."""
+    return [*circular(sizes, 6000), *circular((6,), 6000, nominal="move_to_goal")]
+
+
+def rotated(
+    n: int, theta: list, radius: float, weighting: str, cap: int, nominal: str = "rorca"
+) -> dict:
     """The circular swap in ``ROTATIONS`` envs, each circle turned by a random angle (the
     envs' generators, seed 0): the mean makespan and the mean arrival step of the egoists and
     of the altruists over every rotation (a single layout's order of arrival can turn on a
     tie, its symmetry broken by rounding)."""
     env = BatchedEnv("circular_swap", num_envs=ROTATIONS, safety_filter=True, num_agents=n,
                      max_steps=cap, dt=0.01, theta=theta, circle_radius=radius,
-                     weighting=weighting, random_rotation=True)  # fmt: skip
+                     weighting=weighting, random_rotation=True, nominal=nominal)  # fmt: skip
     env.reset(seed=0)
     arrival = np.full((ROTATIONS, n), -1)  # first arrivals: an env that ends starts anew
     closest = np.inf
@@ -238,7 +247,7 @@ def main(argv: list[str] | None = None) -> int:
         replace_section(args.out, SYMMETRIC_HEADING, symmetric_section(rows), "## Circular swap")
         return 0
     if args.circular_only:
-        section = circular_section(circular((6, 12, 24, 64), 6000))
+        section = circular_section(circular_runs((6, 12, 24, 64)))
         replace_section(args.out, "## Circular swap", [*section, ""], "## Other runs")
         return 0
     if args.big:
@@ -249,7 +258,7 @@ def main(argv: list[str] | None = None) -> int:
     seeds = range(2) if args.quick else range(10)
     sizes = (100,) if args.quick else (100, 1000)
     rows = crowds(sizes, seeds, 4000)
-    circ = circular((6, 12) if args.quick else (6, 12, 24, 64), 6000)
+    circ = circular_runs((6, 12) if args.quick else (6, 12, 24, 64))
     extra = {
         "crowd N = 100, seed 0, move-to-goal (today's controller, kept by name)":
             ours(100, 0, 4000, nominal="move_to_goal", theta_range=(1.0, 10.0), gamma=GAMMA),

@@ -13,13 +13,17 @@ SYMMETRIC_HEADING = "## Crowd of 1,000, symmetric weighting"
 LEARNED_HEADING = "## The learned residual at scale"
 
 
+PAPER_ROW = ", the paper's controller"
+
+
 def circular_section(circ: list) -> list[str]:
     lines = [
         "## Circular swap (alternating theta 2, 1, 2, 1, ...; dt = 0.01)",
         "",
-        "For the 6-agent game the paper's controller (move-to-goal with the right-hand rule,"
-        " `rsvo reproduce`) completes in 610 (symmetric) and 489 (asymmetric) steps; the paper"
-        " reports 620 and 415. Egoists first: the mean arrival step of the egoists (theta 1)"
+        "R-ORCA, the scripted controller, in every row but the last: the paper's 6-agent game"
+        " under the paper's own controller (move-to-goal with the right-hand rule, as"
+        " `rsvo reproduce` runs it; the paper reports 620 steps symmetric and 415 asymmetric)."
+        " Egoists first: the mean arrival step of the egoists (theta 1)"
         " against the altruists (theta 2). The same over 10 layouts, each circle turned by a"
         " random angle (`random_rotation`, seed 0): the means over every rotation (the order of"
         " arrival in one layout can turn on a tie that rounding breaks). Closest pair: over every"
@@ -36,7 +40,8 @@ def circular_section(circ: list) -> list[str]:
         finished = "" if ra["finished"] == rs["finished"] == 10 else (
             f" ({ra['finished']} / {rs['finished']} of 10 finished)")  # fmt: skip
         lines.append(
-            f"| {c['n']} | {a['makespan'] or '-'} | {s['makespan'] or '-'} | "
+            f"| {c['n']}{PAPER_ROW if c['nominal'] == 'move_to_goal' else ''} | "
+            f"{a['makespan'] or '-'} | {s['makespan'] or '-'} | "
             f"{c['asymmetric_ego']:.0f} / {c['asymmetric_alt']:.0f} | "
             f"{c['symmetric_ego']:.0f} / {c['symmetric_alt']:.0f} | "
             f"{ra['makespan']:.0f} / {rs['makespan']:.0f}{finished} | "

@@ -179,3 +179,42 @@ def test_deadlock_metrics_count_arrivals_makespan_and_held_agents():
     assert arrived == sorted(arrived) and arrived[-1] == 6
     # the last arrival ends the episode at this very step (all six at their goals)
     assert info["episode_makespan"][0] == 100 + len(arrived) - 1 == info["episode_steps"][0]
+
+
+def circular_arrivals(n: int, weighting: str, nominal: str) -> np.ndarray:
+    """Each agent's first arrival step in the circular swap of ``n`` agents, alternating theta
+    (2, 1, ...), dt 0.01, filter on (as benchmarks/liveness.py runs it)."""
+    theta = [2.0 if i % 2 == 0 else 1.0 for i in range(n)]
+    env = BatchedEnv("circular_swap", num_envs=1, safety_filter=True, num_agents=n,
+                     max_steps=6000, dt=0.01, theta=theta, weighting=weighting,
+                     circle_radius=max(5.0, 0.6 * n / np.pi), nominal=nominal)  # fmt: skip
+    env.reset(seed=0)
+    arrival = np.full(n, -1)
+    for step in range(1, 6001):
+        _, _, _, trunc, info = env.step(env.nominal_actions())
+        assert info["min_distance"].min() >= 1.0 - 1e-9
+        arrival = np.where((arrival < 0) & info["at_goal"][0], step, arrival)
+        if (arrival >= 0).all() or trunc.any():
+            break
+    assert (arrival >= 0).all()
+    return arrival
+
+
+@pytest.mark.parametrize("n", [6, 12])
+def test_the_asymmetric_circular_swap_is_not_slower_than_the_symmetric(n):
+    """Issue 24's third criterion, its second half, at the sizes the docs quote."""
+    asym = circular_arrivals(n, "asymmetric", "rorca").max()
+    sym = circular_arrivals(n, "symmetric", "rorca").max()
+    assert asym <= sym, (asym, sym)
+
+
+def test_who_arrives_first_in_the_six_agent_game_as_the_docs_say():
+    """docs/liveness.md: at 12 agents R-ORCA brings the egoists (theta 1) in first; in the
+    paper's 6-agent game the altruists arrive first, under R-ORCA and under the paper's own
+    controller alike. A change that turns either order must update the docs."""
+    egoist = np.arange(12) % 2 == 1
+    a = circular_arrivals(12, "asymmetric", "rorca")
+    assert a[egoist].mean() < a[~egoist].mean()
+    for nominal in ("rorca", "move_to_goal"):
+        a = circular_arrivals(6, "asymmetric", nominal)
+        assert a[egoist[:6]].mean() > a[~egoist[:6]].mean(), nominal
