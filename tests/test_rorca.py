@@ -208,7 +208,7 @@ def test_the_asymmetric_circular_swap_is_not_slower_than_the_symmetric(n):
     assert asym <= sym, (asym, sym)
 
 
-def test_who_arrives_first_in_the_six_agent_game_as_the_docs_say():
+def test_who_arrives_first_in_the_circular_swap_as_the_docs_say():
     """docs/liveness.md: at 12 agents R-ORCA brings the egoists (theta 1) in first; in the
     paper's 6-agent game the altruists arrive first, under R-ORCA and under the paper's own
     controller alike. A change that turns either order must update the docs."""
