@@ -13,8 +13,8 @@ move-to-goal (today's controller, kept by name) at N = 100.
 
 Writes ``benchmarks/results/liveness.md`` and ``liveness.png``.
 
-    python benchmarks/liveness.py [--quick] [--circular-only] [--symmetric-only] [--big]
-        [--learned RUN]
+    python benchmarks/liveness.py [--quick] [--circular-only] [--symmetric-only] [--held-out]
+        [--big] [--learned RUN]
 """
 
 from __future__ import annotations
@@ -28,10 +28,13 @@ from liveness_report import (  # a sibling module: benchmarks/ is the script's o
     BIG_CAP,
     BIG_HEADING,
     DT,
+    HELD_OUT_HEADING,
+    HELD_OUT_SEEDS,
     LEARNED_HEADING,
     SYMMETRIC_HEADING,
     big_section,
     circular_section,
+    held_out_section,
     plot,
     replace_section,
     seconds_cell,
@@ -231,6 +234,12 @@ def main(argv: list[str] | None = None) -> int:
         " section in --out",
     )
     ap.add_argument(
+        "--held-out",
+        action="store_true",
+        help="run crowds of 1,000 on seeds 10 to 19 (not the crowd table's) alone, replacing"
+        " their section in --out",
+    )
+    ap.add_argument(
         "--learned",
         type=Path,
         metavar="RUN",
@@ -245,6 +254,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.symmetric_only:
         rows = crowds((1000,), range(10), 4000, weighting="symmetric")
         replace_section(args.out, SYMMETRIC_HEADING, symmetric_section(rows), "## Circular swap")
+        return 0
+    if args.held_out:
+        rows = crowds((1000,), HELD_OUT_SEEDS, 4000)
+        replace_section(args.out, HELD_OUT_HEADING, held_out_section(rows), "## Circular swap")
         return 0
     if args.circular_only:
         section = circular_section(circular_runs((6, 12, 24, 64)))
