@@ -44,6 +44,7 @@ from liveness_report import (  # a sibling module: benchmarks/ is the script's o
 
 from rsvo_env.neighbors import nearest_distance
 from rsvo_env.nominal import move_to_goal
+from rsvo_env.scenarios import paired_theta
 from rsvo_env.vector import BatchedEnv
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -117,11 +118,12 @@ def crowds(sizes, seeds, cap, weighting: str = "asymmetric") -> list[dict]:
 
 
 def circular(sizes, cap, nominal: str = "rorca") -> list[dict]:
-    """The circular swap under the scripted controller ``nominal``, alternating theta
-    (2, 1, 2, 1, ...), both weightings."""
+    """The circular swap under the scripted controller ``nominal``, theta 2 and 1 as the
+    paper's game sets them (``paired_theta``: alternating, every agent's antipode of the other
+    kind), both weightings."""
     rows = []
     for n in sizes:
-        theta = [2.0 if i % 2 == 0 else 1.0 for i in range(n)]
+        theta = paired_theta(n)
         radius = max(5.0, 0.6 * n / np.pi)  # room for n bodies on the circle
         out = {}
         for weighting in ("asymmetric", "symmetric"):

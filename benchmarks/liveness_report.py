@@ -20,12 +20,15 @@ PAPER_ROW = ", the paper's controller"
 
 def circular_section(circ: list) -> list[str]:
     lines = [
-        "## Circular swap (alternating theta 2, 1, 2, 1, ...; dt = 0.01)",
+        "## Circular swap (theta 2, 1 as in the paper's game; dt = 0.01)",
         "",
-        "R-ORCA, the scripted controller, in every row but the last: the paper's 6-agent game"
-        " under the paper's own controller (move-to-goal with the right-hand rule, as"
-        " `rsvo reproduce` runs it; the paper reports 620 steps symmetric and 415 asymmetric)."
-        " Egoists first: the mean arrival step of the egoists (theta 1)"
+        "Theta 2 (altruists) and 1 (egoists) alternate around the circle and every agent swaps"
+        " places with one of the other kind, as in the paper's 6-agent game"
+        " (`rsvo_env.scenarios.paired_theta`: from 12 agents on, the second half of the circle"
+        " inverted). R-ORCA, the scripted controller, in every row but the last: the paper's"
+        " 6-agent game under the paper's own controller (move-to-goal with the right-hand rule,"
+        " as `rsvo reproduce` runs it; the paper reports 620 steps symmetric and 415"
+        " asymmetric). Egoists first: the mean arrival step of the egoists (theta 1)"
         " against the altruists (theta 2). The same over 10 layouts, each circle turned by a"
         " random angle (`random_rotation`, seed 0): the means over every rotation (the order of"
         " arrival in one layout can turn on a tie that rounding breaks). Closest pair: over every"

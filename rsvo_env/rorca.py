@@ -5,10 +5,12 @@ ORCA (van den Berg et al., 2011) gives agent i, for each neighbour j within ``ne
 the smallest change ``u`` of the relative velocity that leaves the truncated velocity obstacle
 (horizon ``tau``), and asks i to take half of it: the half-plane of velocities v with
 ``(v - (v_i + u / 2)) . n >= 0`` (``n`` the outward normal). Here agent i takes the share
-``1 - omega_ij`` (eq. ``rorca``): the egoist (larger omega) does less of the avoidance, and
-``omega = 1/2`` is ORCA. Unlike a filter's rows these are *active*: an agent parked on its goal
-whose velocity obstacle holds 0 must step aside, which is what makes crowds finish. The
-velocity is the one closest to the preferred velocity within the half-planes and the speed
+``1 - omega_ij`` of ``u`` where it is avoidance (the relative velocity inside the obstacle) and
+``omega_ij`` where it is slack (outside, ``u`` the room left to close), eq. ``rorca``: the egoist
+(larger omega) does less of the avoidance and gets more of the slack, as the filter's rows give
+it, and ``omega = 1/2`` is ORCA. Unlike a filter's rows these are *active*: an agent parked on
+its goal whose velocity obstacle holds 0 must step aside, which is what makes crowds finish.
+The velocity is the one closest to the preferred velocity within the half-planes and the speed
 limit (an octagon inscribed in the disk), solved exactly by ``rsvo_env.solvers.exact``; an
 empty polygon gives the least-violating velocity (ORCA's third linear program). The R-CBF
 filter on top keeps the guarantee whatever this controller proposes.
@@ -26,7 +28,7 @@ from rsvo_env.responsibility import Weighting
 from rsvo_env.solvers import exact
 
 # below this fraction of its preferred speed an agent counts as held still (it sidesteps)
-SIDESTEP = 0.05
+SIDESTEP = 0.0625
 # near its goal, where its look-ahead passes the goal and reaches a neighbour's body, an agent
 # that has come no closer to its goal for HOLD_SECONDS prefers at most ARRIVE times its goal
 # distance per horizon tau: held for tau, as the half-planes assume, its preferred velocity then
@@ -41,9 +43,11 @@ _OCTAGON = np.stack(
 
 
 @njit(cache=True)
-def _half_planes(x, v, radii, I, J, share, tau, dt):
+def _half_planes(x, v, radii, I, J, share, tau, dt, parked, seen):
     """Both directed half-planes of each pair (I, J): rows ``A . v <= b`` for agent I (first
-    P) and agent J (last P), ``share`` (P, 2) each side's part of the avoidance."""
+    P) and agent J (last P), ``share`` (P, 2) each side's part of the avoidance (summing to 1;
+    of the slack each side takes the other's share). An agent ``parked`` (M,) reads a neighbour
+    en route at the velocity ``seen`` (M, 2) instead of its current one."""
     P = I.shape[0]
     A = np.empty((2 * P, 2))
     b = np.empty(2 * P)
@@ -53,7 +57,8 @@ def _half_planes(x, v, radii, I, J, share, tau, dt):
         for side in range(2):
             me, other = (i, j) if side == 0 else (j, i)
             rx, ry = x[other, 0] - x[me, 0], x[other, 1] - x[me, 1]
-            wx0, wy0 = v[me, 0] - v[other, 0], v[me, 1] - v[other, 1]
+            vo = seen[other] if parked[me] and not parked[other] else v[other]
+            wx0, wy0 = v[me, 0] - vo[0], v[me, 1] - vo[1]
             R = radii[me] + radii[other]
             d2, R2 = rx * rx + ry * ry, R * R
             if d2 > R2:
@@ -81,7 +86,10 @@ def _half_planes(x, v, radii, I, J, share, tau, dt):
                 dx, dy = uy, -ux
                 s = R / dt - wl
                 cx, cy = s * ux, s * uy
-            px, py = v[me, 0] + share[p, side] * cx, v[me, 1] + share[p, side] * cy
+            # A . u > 0 (A the row below): the current velocity already meets the row, and u is
+            # room left to close (slack), not avoidance
+            sh = share[p, side] if dy * cx - dx * cy <= 0.0 else share[p, 1 - side]
+            px, py = v[me, 0] + sh * cx, v[me, 1] + sh * cy
             k = p + side * P
             # the half-plane det(d, point - v) <= 0 as a row
             A[k, 0], A[k, 1] = dy, -dx
@@ -139,8 +147,9 @@ def rorca_velocities(
     ``neighbor_dist`` (default ``5 (r_i + r_j)`` of the largest pair), and the speed limit
     ``u_max`` (ORCA's defaults: 10 neighbours, 5 pair distances, horizon 2 s). ``radii``
     (E, N) or (N,); the weights come from the scores ``theta`` (E, N) and each env's weighting
-    ``modes`` (``"symmetric"``: ORCA); ``parked`` (E, N): agents at their goals, which take at
-    least half of the avoidance from agents en route; ``goals`` (E, N, 2): near its goal, where
+    ``modes`` (``"symmetric"``: ORCA); ``parked`` (E, N): agents at their goals, which take all
+    of the avoidance and none of the slack from agents en route, read at their preferred
+    velocities; ``goals`` (E, N, 2): near its goal, where
     its look-ahead reaches a neighbour, an agent's preferred speed is capped
     (:func:`arrival_capped`), only the agents ``held`` (E, N) if given."""
     E, n = positions.shape[:2]
@@ -151,23 +160,24 @@ def rorca_velocities(
     w = pairs.weights_of(theta, modes, I, J)
     x = positions.reshape(E * n, 2)
     v = velocities.reshape(E * n, 2)
+    M = E * n
     share = 1.0 - w
+    park = np.zeros(M, dtype=np.bool_)
     if parked is not None:
-        # an agent parked on its goal takes at least half of the avoidance from one en route:
-        # an egoist at rest would otherwise stand as a wall (the shares still sum to 1)
+        # an agent parked on its goal takes all of the avoidance from one en route, reading it
+        # at its preferred velocity so as to step aside before it is pushed: an egoist at rest
+        # would otherwise stand as a wall (the shares still sum to 1)
         park = np.ascontiguousarray(parked).reshape(-1)
         s = share[:, 0]
-        s = np.where(park[I] & ~park[J], np.maximum(s, 0.5), s)
-        s = np.where(park[J] & ~park[I], np.minimum(s, 0.5), s)
+        s = np.where(park[I] & ~park[J], 1.0, np.where(park[J] & ~park[I], 0.0, s))
         share = np.stack([s, 1.0 - s], axis=1)
     r = np.ascontiguousarray(radii).reshape(-1)
-    A, b = _half_planes(x, v, r, I, J, share, float(tau),
-                        float(dt))  # fmt: skip
-    M = E * n
     pref = preferred.reshape(M, 2)
     if goals is not None:
         hold = None if held is None else np.ascontiguousarray(held).reshape(-1)
         pref = arrival_capped(pref, x, goals.reshape(M, 2), r, tau, I, J, hold)
+    A, b = _half_planes(x, v, r, I, J, share, float(tau), float(dt), park,
+                        np.ascontiguousarray(pref, dtype=np.float64))  # fmt: skip
     owner = np.concatenate([I, J])
     if max_neighbors is not None and len(owner):
         # ORCA's neighbour rule: each agent's nearest max_neighbors within neighbor_dist

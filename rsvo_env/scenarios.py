@@ -47,6 +47,21 @@ class PositionSwap(Scenario):
         return start.min(axis=0) - pad, start.max(axis=0) + pad
 
 
+def paired_theta(n: int, egoist: float = 1.0, altruist: float = 2.0) -> list[float]:
+    """Scores for the circular swap of ``n`` agents as the paper's game sets them (Sec. V-C):
+    altruists (agent 0 first) and egoists alternate around the circle and, ``n`` even, every
+    agent swaps places with one of the other kind, its antipode. Where ``n / 2`` is odd (the
+    paper's 6) that is plain alternation; where it is even, the second half of the circle takes
+    the first half's scores inverted (two seams where neighbours share a score): plain
+    alternation would pair every egoist with an egoist."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"paired_theta: n must be a positive integer, got {n!r}")
+    kinds = [i % 2 == 0 for i in range(n)]  # True: altruist
+    if n % 2 == 0:
+        kinds = kinds[: n // 2] + [not k for k in kinds[: n // 2]]
+    return [altruist if k else egoist for k in kinds]
+
+
 class CircularSwap(Scenario):
     """N agents on a circle, each to the antipodal point (paper, Sec. V-C, Figs. 5-7)."""
 

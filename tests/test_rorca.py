@@ -10,14 +10,16 @@ from hypothesis import strategies as st
 
 import rsvo_env
 from rsvo_env import rorca
+from rsvo_env.scenarios import paired_theta
 from rsvo_env.vector import BatchedEnv
 
 coords = st.floats(-10, 10)
 
 
-def rows_of(x, v, radii, share, tau=2.0, dt=0.05):
+def rows_of(x, v, radii, share, tau=2.0, dt=0.05, parked=(False, False), seen=None):
     I, J = np.array([0]), np.array([1])
-    return rorca._half_planes(x, v, radii, I, J, share, tau, dt)
+    seen = v if seen is None else seen
+    return rorca._half_planes(x, v, radii, I, J, share, tau, dt, np.array(parked), seen)
 
 
 @settings(deadline=None)  # the first example compiles the kernel
@@ -26,8 +28,9 @@ def rows_of(x, v, radii, share, tau=2.0, dt=0.05):
 def test_any_pair_of_velocities_in_both_half_planes_is_collision_free_within_tau(
     px, py, vx, vy, w, a, b, c, d
 ):
-    """ORCA's reciprocity with the shares (1 - omega, omega) that sum to 1: if agent i's and
-    agent j's velocities each meet their own half-plane, the pair does not collide within tau."""
+    """ORCA's reciprocity with the shares (1 - omega, omega) of the avoidance and (omega,
+    1 - omega) of the slack, each pair summing to 1: if agent i's and agent j's velocities each
+    meet their own half-plane, the pair does not collide within tau."""
     x = np.array([[0.0, 0.0], [px, py]])
     R, tau = 1.0, 2.0
     if np.hypot(px, py) <= R * 1.001:
@@ -64,6 +67,43 @@ def test_the_egoist_takes_the_smaller_share_and_half_is_orca():
     ego = change([0.2, 0.8])  # agent 0 is the egoist: it takes 0.2 of the avoidance
     assert ego[0] < half[0] < ego[1]
     assert ego[0] + ego[1] == pytest.approx(half[0] + half[1], rel=1e-9)
+
+
+def test_outside_the_velocity_obstacle_the_egoist_gets_the_larger_share_of_the_slack():
+    """Head-on but slow and far apart (no collision within tau): the current velocities meet
+    both half-planes, and the room left to close is split (omega, 1 - omega), the egoist's
+    half-plane the looser, as the filter's rows split a pair's slack; half and half is ORCA."""
+    x = np.array([[0.0, 0.0], [12.0, 0.1]])
+    v = np.array([[0.5, 0.0], [-0.5, 0.0]])
+    radii = np.full(2, 0.5)
+
+    def room(share):
+        A, b = rows_of(x, v, radii, np.array([share]))
+        # how far inside its half-plane each agent's current velocity lies
+        return [(b[k] - A[k] @ v[k]) / np.linalg.norm(A[k]) for k in range(2)]
+
+    half = room([0.5, 0.5])
+    assert half[0] == pytest.approx(half[1], rel=1e-9) and half[0] > 0
+    ego = room([0.2, 0.8])  # agent 0, the egoist (omega 0.8), gets 0.8 of the slack
+    assert ego[1] < half[0] < ego[0]
+    assert ego[0] == pytest.approx(4.0 * ego[1], rel=1e-9)
+
+
+def test_a_parked_agent_takes_all_of_the_avoidance_reading_the_other_as_it_would_move():
+    """Agent 0 parked on its goal, agent 1 en route at rest but preferring to drive through:
+    read at its current velocity there is nothing to avoid, read at the preferred one agent 0's
+    half-plane excludes rest, so it steps aside first; agent 1, reading agent 0 at rest, keeps
+    its current velocity."""
+    x = np.array([[0.0, 0.0], [3.0, 0.0]])
+    v = np.zeros((2, 2))
+    seen = np.array([[0.0, 0.0], [-2.0, 0.0]])
+    radii = np.full(2, 0.5)
+    share = np.array([[1.0, 0.0]])
+    A, b = rows_of(x, v, radii, share)
+    assert (A @ np.zeros(2) <= b + 1e-12).all()
+    A, b = rows_of(x, v, radii, share, parked=(True, False), seen=seen)
+    assert A[0] @ v[0] > b[0]  # agent 0 must move
+    assert A[1] @ v[1] < b[1]  # agent 1 need not: it reads agent 0 at rest, all slack its own
 
 
 def test_rorca_velocities_respect_the_speed_limit_and_reduce_to_preferred_alone():
@@ -182,9 +222,10 @@ def test_deadlock_metrics_count_arrivals_makespan_and_held_agents():
 
 
 def circular_arrivals(n: int, weighting: str, nominal: str) -> np.ndarray:
-    """Each agent's first arrival step in the circular swap of ``n`` agents, alternating theta
-    (2, 1, ...), dt 0.01, filter on (as benchmarks/liveness.py runs it)."""
-    theta = [2.0 if i % 2 == 0 else 1.0 for i in range(n)]
+    """Each agent's first arrival step in the circular swap of ``n`` agents, theta 2 and 1 as
+    the paper's game sets them (``paired_theta``), dt 0.01, filter on (as
+    benchmarks/liveness.py runs it)."""
+    theta = paired_theta(n)
     env = BatchedEnv("circular_swap", num_envs=1, safety_filter=True, num_agents=n,
                      max_steps=6000, dt=0.01, theta=theta, weighting=weighting,
                      circle_radius=max(5.0, 0.6 * n / np.pi), nominal=nominal)  # fmt: skip
@@ -209,12 +250,29 @@ def test_the_asymmetric_circular_swap_is_not_slower_than_the_symmetric(n):
 
 
 def test_who_arrives_first_in_the_circular_swap_as_the_docs_say():
-    """docs/liveness.md: at 12 agents R-ORCA brings the egoists (theta 1) in first; in the
-    paper's 6-agent game the altruists arrive first, under R-ORCA and under the paper's own
-    controller alike. A change that turns either order must update the docs."""
-    egoist = np.arange(12) % 2 == 1
-    a = circular_arrivals(12, "asymmetric", "rorca")
-    assert a[egoist].mean() < a[~egoist].mean()
-    for nominal in ("rorca", "move_to_goal"):
-        a = circular_arrivals(6, "asymmetric", nominal)
-        assert a[egoist[:6]].mean() > a[~egoist[:6]].mean(), nominal
+    """docs/liveness.md: R-ORCA brings the egoists (theta 1) in first in the paper's 6-agent
+    game and at 12 agents; under the paper's own controller the paper's game brings the
+    altruists in first. A change that turns either order must update the docs."""
+    for n, nominal in ((6, "rorca"), (12, "rorca"), (6, "move_to_goal")):
+        egoist = np.array(paired_theta(n)) == 1.0
+        a = circular_arrivals(n, "asymmetric", nominal)
+        first = a[egoist].mean() < a[~egoist].mean()
+        assert first == (nominal == "rorca"), (n, nominal, a[egoist].mean(), a[~egoist].mean())
+
+
+@pytest.mark.parametrize("n", [1, 6, 12, 24, 7])
+def test_paired_theta_alternates_and_pairs_every_agent_with_its_other_kind(n):
+    theta = np.array(paired_theta(n))
+    assert set(theta) <= {1.0, 2.0} and theta[0] == 2.0
+    if n % 2 == 0:
+        assert (theta != np.roll(theta, n // 2)).all()  # the antipode is of the other kind
+        seams = int((theta == np.roll(theta, 1)).sum())
+        assert seams == (0 if (n // 2) % 2 else 2)
+    else:
+        assert (theta[1:] != theta[:-1]).all()
+
+
+@pytest.mark.parametrize("bad", [0, -2, 2.5, True, "6", None])
+def test_paired_theta_names_a_bad_count(bad):
+    with pytest.raises(ValueError, match="paired_theta: n must be a positive integer"):
+        paired_theta(bad)
