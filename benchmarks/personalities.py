@@ -10,6 +10,11 @@ The searches run in the ``distributed`` venv (Ray Tune, Optuna), the rest in the
     python benchmarks/personalities.py --search runs/search_c6 runs/search_c12 \
         runs/search_doorway --runs runs
 
+``--replace`` reruns the scripted sections alone (those of the searches given, and the random
+crowds'), each in place of its namesake in the results file, e.g. after a change to R-ORCA:
+
+    python benchmarks/personalities.py --replace --search runs/search_doorway
+
 The learned sections need the training runs whose commands the results file lists (circular
 game and crowd, three variants, three training seeds each); a missing run leaves its section
 out. Fixed assignments run the scripted controller behind the filter
@@ -25,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from liveness_report import replace_section  # a sibling module: benchmarks/ is the path
 
 from rsvo_env.vector import BatchedEnv
 from training.config import limit_threads
@@ -35,6 +41,7 @@ from training.personalities import alternating, evaluate
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results"
 EPISODES, SEED = 100, 1000
+LEARNED_PREFIX = "## Theta learned online"
 RANDOM_SETS = 200
 # the crowd as benchmarks/liveness.py runs it: gamma dt = 1, room to finish
 CROWD = {"dt": 0.05, "gamma": 20.0, "max_steps": 4000}
@@ -220,7 +227,7 @@ def learned_section(runs: Path, scenario: str, lines: list[str]) -> bool:
             out = run_episodes(cfg, policy, EPISODES, SEED)
             records.setdefault(variant, []).append(out)
     lines += [
-        f"## Theta learned online ({study['title']})",
+        f"{LEARNED_PREFIX} ({study['title']})",
         "",
         f"The config `training/configs/{scenario}.yaml` ({study['config']}), three training "
         f"seeds a variant; each run's `best_model.zip` on {EPISODES} held-out seeds "
@@ -327,9 +334,26 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--search", nargs="+", type=Path, default=[], help="theta_search outputs")
     p.add_argument("--runs", type=Path, default=ROOT / "runs")
     p.add_argument("--out", type=Path, default=OUT)
+    p.add_argument(
+        "--replace",
+        action="store_true",
+        help="rerun the scripted sections alone (the --search outputs' and the random crowds'),"
+        " each replacing its namesake in --out's personalities.md; the rest stays",
+    )
     args = p.parse_args(argv)
     limit_threads(1)
     args.out.mkdir(parents=True, exist_ok=True)
+    if args.replace:
+        sections: list[list[str]] = [[] for _ in args.search]
+        for search, section in zip(args.search, sections, strict=True):
+            fixed_section(search, section)
+        for n in (12, 100):
+            sections.append([])
+            random_section("crowd", {"num_agents": n, **CROWD}, sections[-1])
+        path = args.out / "personalities.md"
+        for section in sections:
+            replace_section(path, section[0], section, LEARNED_PREFIX)
+        return 0
     lines = [
         "# What personalities buy",
         "",
