@@ -106,6 +106,24 @@ def test_a_parked_agent_takes_all_of_the_avoidance_reading_the_other_as_it_would
     assert A[1] @ v[1] < b[1]  # agent 1 need not: it reads agent 0 at rest, all slack its own
 
 
+@pytest.mark.parametrize("theta", [(1.0, 1.0), (1.0, 10.0), (10.0, 1.0)])
+def test_an_agent_parked_on_its_goal_steps_aside_before_it_is_pushed(theta):
+    """R-ORCA through its public entry point: agent 0 rests on its goal (preferring to stay),
+    agent 1 rests 3 m away preferring 2 m/s straight at it. Not parked, agent 0 stays put;
+    parked, it reads agent 1 at its preferred velocity, takes all of the avoidance whatever
+    the scores, and moves."""
+    x = np.array([[[0.0, 0.0], [3.0, 0.0]]])
+    pref = np.array([[[0.0, 0.0], [-2.0, 0.0]]])
+
+    def velocities(parked):
+        return rorca.rorca_velocities(x, np.zeros_like(x), pref, np.full(2, 0.5),
+                                      np.array([theta]), ["asymmetric"], 2.0, 0.05,
+                                      parked=np.array([[parked, False]]))[0]  # fmt: skip
+
+    assert np.allclose(velocities(False)[0], 0.0)
+    assert np.linalg.norm(velocities(True)[0]) > 0.1
+
+
 def test_rorca_velocities_respect_the_speed_limit_and_reduce_to_preferred_alone():
     rng = np.random.default_rng(0)
     E, n = 3, 40
