@@ -344,15 +344,12 @@ def main(argv: list[str] | None = None) -> int:
     limit_threads(1)
     args.out.mkdir(parents=True, exist_ok=True)
     if args.replace:
-        sections: list[list[str]] = [[] for _ in args.search]
-        for search, section in zip(args.search, sections, strict=True):
-            fixed_section(search, section)
-        for n in (12, 100):
-            sections.append([])
-            random_section("crowd", {"num_agents": n, **CROWD}, sections[-1])
-        path = args.out / "personalities.md"
-        for section in sections:
-            replace_section(path, section[0], section, LEARNED_PREFIX)
+        runs = [(fixed_section, (search,)) for search in args.search]
+        runs += [(random_section, ("crowd", {"num_agents": n, **CROWD})) for n in (12, 100)]
+        for section_of, run_args in runs:
+            section: list[str] = []
+            section_of(*run_args, section)
+            replace_section(args.out / "personalities.md", section[0], section, LEARNED_PREFIX)
         return 0
     lines = [
         "# What personalities buy",

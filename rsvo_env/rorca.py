@@ -149,9 +149,9 @@ def rorca_velocities(
     (E, N) or (N,); the weights come from the scores ``theta`` (E, N) and each env's weighting
     ``modes`` (``"symmetric"``: ORCA); ``parked`` (E, N): agents at their goals, which take all
     of the avoidance and none of the slack from agents en route, read at their preferred
-    velocities; ``goals`` (E, N, 2): near its goal, where
-    its look-ahead reaches a neighbour, an agent's preferred speed is capped
-    (:func:`arrival_capped`), only the agents ``held`` (E, N) if given."""
+    velocities; ``goals`` (E, N, 2): near its goal, where its look-ahead reaches a neighbour, an
+    agent's preferred speed is capped (:func:`arrival_capped`), only the agents ``held`` (E, N)
+    if given."""
     E, n = positions.shape[:2]
     radii = np.broadcast_to(radii, (E, n))
     if neighbor_dist is None:

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from rsvo_env import nominal
 from rsvo_env.scenario import COMMON_DEFAULTS, DEADLOCK_RESOLUTIONS, Scenario
+from rsvo_env.validation import check_count
 
 __all__ = ["COMMON_DEFAULTS", "DEADLOCK_RESOLUTIONS", "SCENARIOS", "Scenario", "make_scenario"]
 
@@ -54,8 +55,7 @@ def paired_theta(n: int, egoist: float = 1.0, altruist: float = 2.0) -> list[flo
     paper's 6) that is plain alternation; where it is even, the second half of the circle takes
     the first half's scores inverted (two seams where neighbours share a score): plain
     alternation would pair every egoist with an egoist."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"paired_theta: n must be a positive integer, got {n!r}")
+    n = check_count(n, "paired_theta: n", 1)
     kinds = [i % 2 == 0 for i in range(n)]  # True: altruist
     if n % 2 == 0:
         kinds = kinds[: n // 2] + [not k for k in kinds[: n // 2]]

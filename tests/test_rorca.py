@@ -292,5 +292,5 @@ def test_paired_theta_alternates_and_pairs_every_agent_with_its_other_kind(n):
 
 @pytest.mark.parametrize("bad", [0, -2, 2.5, True, "6", None])
 def test_paired_theta_names_a_bad_count(bad):
-    with pytest.raises(ValueError, match="paired_theta: n must be a positive integer"):
+    with pytest.raises(ValueError, match=r"paired_theta: n = .* must be an integer >= 1"):
         paired_theta(bad)
