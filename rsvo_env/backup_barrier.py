@@ -38,15 +38,20 @@ from rsvo_env.rows import Rows
 # the trust box is solved for a remainder a relative hair below the smallest slack, so the
 # backup meets the tightest row with room for rounding
 TRUST_SHRINK = 1.0 - 1e-9
+# h below 0 by less than this share of its terms is rounding, read as 0: the hair the collision
+# test (a distance below (r_i + r_j)(1 - 1e-9)) and the solver's feasibility allowance leave too
+SETTLE = 1e-9
 _SQRT_HALF = np.sqrt(0.5)
 
 
 def settled(h: NDArray, size: NDArray) -> NDArray[np.float64]:
-    """``h`` with a negative value within rounding of 0 (``1e-12`` of the terms it is made of,
-    ``size``) read as 0: a pair resting at h = 0 drifts by roundings around it, and reading
-    those as violations would leave the backup a rounding short of its rows. A state truly
-    below 0 keeps its h, so the rows ask it to recover at the rate gamma dt."""
-    return np.where(h < -1e-12 * size, h, np.maximum(h, 0.0))
+    """``h`` with a negative value within rounding of 0 (``SETTLE`` of the terms it is made of,
+    ``size``: the coordinates, the distance and the reaches) read as 0. A pair resting at h = 0
+    drifts by roundings around it (the state's, and the solver's allowance of ``1e-12`` of a
+    row's terms a step); reading those as violations would ask a resting agent for a recovery
+    it cannot make. A state truly below 0 keeps its h, so the rows ask it to recover at the
+    rate gamma dt."""
+    return np.where(h < -SETTLE * size, h, np.maximum(h, 0.0))
 
 
 def stopping_reach(speed: NDArray, c: NDArray, dt: float | None) -> NDArray[np.float64]:
@@ -82,17 +87,19 @@ def trust_radius(tau: NDArray, c: NDArray, dt: float) -> NDArray[np.float64]:
 @dataclass(frozen=True)
 class AgentTerms:
     """What each agent's rows share (M agents): deceleration ``c``, speed, reach ``L``, the
-    backup ``beta``, the gradient ``g`` of the reach after the step, the backup's displacement
-    ``step`` and its ``margin`` ``L - L(|v + dt beta|)``, and the box radius ``rho_full`` around
-    the backup that covers the whole box."""
+    backup ``beta``, the gradient ``g`` of the reach after the step, the unit velocity ``unit``
+    (0 at rest), the backup's travel ``|dp(beta)|`` and its ``spare`` ``L - L(|v + dt beta|) -
+    travel`` (Lemma 1: ``c dt^2 / 2`` while ``s >= c dt``, else ``s^2 / (2 c)``), and the box
+    radius ``rho_full`` around the backup that covers the whole box."""
 
     c: NDArray
     speed: NDArray
     L: NDArray
     beta: NDArray
     g: NDArray
-    step: NDArray
-    margin: NDArray
+    unit: NDArray
+    travel: NDArray
+    spare: NDArray
     rho_full: NDArray
 
 
@@ -103,21 +110,32 @@ def agent_terms(v: NDArray, lo: NDArray, hi: NDArray, dt: float | None) -> Agent
     L = stopping_reach(speed, c, dt)
     beta = backup_action(v, c, dt)
     rho_full = np.maximum(hi - beta, beta - lo).max(axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        unit = np.where(speed[:, None] > 0, v / speed[:, None], 0.0)
     if dt is None:  # continuous time: the rows' gradient is v / c, no step, no trust box
-        return AgentTerms(c, speed, L, beta, v / c[:, None], 0.0 * v, 0.0 * L, rho_full)
+        zero = 0.0 * L
+        return AgentTerms(c, speed, L, beta, v / c[:, None], unit, zero, zero, rho_full)
     w = v + dt * beta
-    after = stopping_reach(np.sqrt((w * w).sum(axis=-1)), c, dt)
-    step = dt * v + (0.5 * dt * dt) * beta
-    return AgentTerms(c, speed, L, beta, dt * w / c[:, None], step, L - after, rho_full)
+    # Lemma 1's terms in closed form: the slack at the backup is their sum, each >= 0, so it
+    # keeps the c dt^2 / 2 it exceeds 0 by at any speed (a difference of reaches would lose it
+    # to a rounding of s^2 / c)
+    brakes = speed >= c * dt
+    travel = np.where(brakes, speed * dt - 0.5 * c * dt * dt, 0.5 * speed * dt)
+    spare = np.where(brakes, 0.5 * c * dt * dt, speed * speed / (2.0 * c))
+    return AgentTerms(c, speed, L, beta, dt * w / c[:, None], unit, travel, spare, rho_full)
 
 
 def _directed(t: AgentTerms, owner: NDArray, e: NDArray, sigma: NDArray, dt: float | None):
     """One directed row per (owner, normal e, share sigma): its A and its slack tau at the
-    backup (sampled time), or A and b (continuous time)."""
+    backup (sampled time), or A and b (continuous time). The backup moves along ``unit`` by
+    ``travel``, so ``tau = sigma + (1 + e . unit) travel + spare``, with ``1 + e . unit`` as
+    ``|e + unit|^2 / 2``: every term >= 0 and none a difference."""
     if dt is None:
         return t.g[owner], sigma + np.einsum("kd,kd->k", e, t.g[owner] * t.c[owner, None])
     A = t.g[owner] - (0.5 * dt * dt) * e
-    return A, sigma + np.einsum("kd,kd->k", e, t.step[owner]) + t.margin[owner]
+    u = t.unit[owner]
+    toward = np.where(t.travel[owner] > 0, 0.5 * ((e + u) * (e + u)).sum(axis=-1), 0.0)
+    return A, sigma + toward * t.travel[owner] + t.spare[owner]
 
 
 def backup_rows(
