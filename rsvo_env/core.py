@@ -331,7 +331,7 @@ class Simulator:
         """
         s, sc = self.state, self.scenario
         if self.theta_action is not None:
-            s.theta[:] = self.theta_action.theta(actions[..., 2])
+            s.theta[:] = self.theta_action.step_theta(actions[..., 2], s.theta)
             self.weights.update_all(s.theta, s.weighting)
             actions = actions[..., :2]
         u_nominal = self.to_controls(actions)

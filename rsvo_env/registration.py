@@ -47,23 +47,23 @@ IDS = {
 
 def register_all() -> None:
     for env_id, scenario in IDS.items():
-        kwargs = {"scenario": scenario}
+        kwargs = {"id_scenario": scenario}  # the id's own: ``scenario=`` may not change it
         if env_id not in gymnasium.registry:
             gymnasium.register(
                 id=env_id,
-                entry_point="wrappers.joint:JointControlEnv",
+                entry_point="wrappers.registered:joint_env",
                 kwargs=kwargs,
                 max_episode_steps=SCENARIOS[scenario].defaults["max_steps"],
             )
         if not HAS_REGISTRY:
             continue
         for env_type, registry, factory in (
-            ("parallel", pettingzoo.parallel_registry, "filtered_parallel_env"),
-            ("aec", pettingzoo.aec_registry, "filtered_aec_env"),
+            ("parallel", pettingzoo.parallel_registry, "parallel_env"),
+            ("aec", pettingzoo.aec_registry, "aec_env"),
         ):
             if env_id not in registry:
                 pettingzoo.register(
-                    env_type, env_id, f"wrappers.safety_filter:{factory}", kwargs=dict(kwargs)
+                    env_type, env_id, f"wrappers.registered:{factory}", kwargs=dict(kwargs)
                 )
 
 

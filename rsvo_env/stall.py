@@ -12,6 +12,7 @@ clock reads the same in any unit of length). An agent at its goal is not stalled
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,8 +29,10 @@ DEADLOCK_SECONDS = 10.0
 
 
 def deadlock_steps(dt: float) -> int:
-    """The deadlock window in steps of ``dt`` (at least one)."""
-    return max(1, int(round(DEADLOCK_SECONDS / dt)))
+    """The deadlock window in steps of ``dt``: the fewest steps that last ``DEADLOCK_SECONDS``
+    (at least one), so no agent is flagged before then (a rounding of the quotient, as at
+    dt = 0.1, is not a step more)."""
+    return max(1, math.ceil(DEADLOCK_SECONDS / dt * (1.0 - 1e-12)))
 
 
 @dataclass

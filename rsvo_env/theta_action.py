@@ -40,6 +40,16 @@ class ThetaAction:
         lo, hi = np.log(self.theta_min), np.log(self.theta_max)
         return np.exp(lo + t * (hi - lo))
 
+    def step_theta(self, a: NDArray, current: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The scores (...) of a step's action components (...): :meth:`theta`, except that a
+        component equal, at the action space's float32 resolution, to the one the current score
+        maps to keeps that score (clipped to the range) exactly. An action in float32 cannot
+        name a score more finely, and this is what :meth:`action` promises the scripted
+        controller: its component keeps each agent's theta, with no drift of a rounding."""
+        keep = np.float32(a) == self.action(current).astype(np.float32)
+        kept = np.clip(current, self.theta_min, self.theta_max)
+        return np.where(keep, kept, self.theta(a))
+
     def action(self, theta: NDArray[np.float64]) -> NDArray[np.float64]:
         """The action components (...) that give the scores ``theta`` (...), clipped to the
         range: the inverse of :meth:`theta`. A zero range maps to 0."""

@@ -176,7 +176,26 @@ def sb3_section(algo: str) -> Check:
     for name in ("learning_rate", "clip_range", "clip_range_vf", "ent_coef", "target_kl"):
         if name in fields:
             fields[name] = optional(_number_or_text(name))
+    fields.update({k: v for k, v in SB3_RANGES.items() if k in fields})
+    if algo == "ppo":  # it normalises advantages over a minibatch: at least two samples
+        fields["batch_size"] = integer(2)
     return section(fields)
+
+
+# the ranges SB3 asserts (or fails on) deep inside its constructor or its first rollout, checked
+# here first: a value it would take to a traceback is the user's mistake, named before any work
+SB3_RANGES: dict[str, Check] = {
+    "n_steps": integer(1),
+    "batch_size": integer(1),
+    "n_epochs": integer(1),
+    "buffer_size": integer(1),
+    "gamma": real(0.0, 1.0),
+    "gae_lambda": real(0.0, 1.0),
+    "tau": real(0.0, 1.0),
+    "vf_coef": real(0.0, float("inf")),
+    "max_grad_norm": real(positive=True),
+    "stats_window_size": integer(1),
+}
 
 
 def _number_or_text(name: str) -> Check:

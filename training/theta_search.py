@@ -23,12 +23,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from rsvo_env.cli.arguments import count
 from rsvo_env.cli.main import Parser
 from rsvo_env.validation import check_positive
 from rsvo_env.vector import BatchedEnv
+from training import config as configs
 from training import tune_runs
 from training.personalities import FIELDS as STATS
 from training.personalities import PAPER_GAME, alternating, evaluate, objective
@@ -41,7 +41,7 @@ def scenario_kwargs(scenario: str, assignments: list[str]) -> dict[str, Any]:
         if "=" not in a:
             raise ValueError(f"--set {a!r}: use key=value, e.g. num_agents=12")
         key, raw = a.split("=", 1)
-        kwargs[key] = yaml.safe_load(raw)
+        kwargs[key] = configs.load_yaml(raw)
     return kwargs
 
 

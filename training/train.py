@@ -23,6 +23,9 @@ from rsvo_env.cli.arguments import count, output_problem
 from rsvo_env.cli.main import Parser
 from training import config as configs
 
+# flags of the RLlib engine alone: given with another engine they would be ignored
+RLLIB_FLAGS = ("num_env_runners", "num_envs_per_env_runner", "address")
+
 
 def parser() -> argparse.ArgumentParser:
     p = Parser(
@@ -50,8 +53,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--engine", choices=configs.ENGINES, help="sb3 (default) or rllib (the distributed extra)"
     )
-    p.add_argument("--num-env-runners", type=int, default=0, help="rllib: sampling processes")
-    p.add_argument("--num-envs-per-env-runner", type=int, default=1, help="rllib: envs each")
+    p.add_argument("--num-env-runners", type=count(0), help="rllib: sampling processes (0)")
+    p.add_argument("--num-envs-per-env-runner", type=count(1), help="rllib: envs each (1)")
     p.add_argument("--address", help="rllib: a running Ray cluster (default: a local instance)")
     p.add_argument("--out", required=True, help="the run directory")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -144,18 +147,19 @@ def main(argv: list[str] | None = None) -> int:
     problem = output_problem(Path(args.out), directory=True)
     if problem:
         p.exit(2, f"{p.prog}: error: --out {problem}\n")
+    rllib_only = [f for f in RLLIB_FLAGS if getattr(args, f) is not None]
+    if cfg["engine"] != "rllib" and rllib_only:
+        flags = ", ".join("--" + f.replace("_", "-") for f in rllib_only)
+        p.exit(2, f"{p.prog}: error: {flags} are for --engine rllib, not {cfg['engine']}\n")
     if cfg["engine"] == "rllib":
         from training.rllib_engine import train_rllib
 
-        for flag in ("num_env_runners", "num_envs_per_env_runner"):
-            if getattr(args, flag) < (0 if flag == "num_env_runners" else 1):
-                p.exit(2, f"{p.prog}: error: --{flag.replace('_', '-')} = {getattr(args, flag)}\n")
         summary = train_rllib(
             cfg,
             args.out,
             args.time_limit,
-            args.num_env_runners,
-            args.num_envs_per_env_runner,
+            args.num_env_runners or 0,
+            args.num_envs_per_env_runner or 1,
             args.address,
         )
     else:

@@ -35,6 +35,14 @@ class SB3VecEnv(VecEnv):
     def __init__(self, venv: Any) -> None:
         if not isinstance(venv, BatchedEnv):
             venv = ParallelBatch(venv)
+        elif venv.autoreset_mode != "same_step":
+            # SB3 resets an env on the step it ends and reads its last observation from
+            # ``terminal_observation``; a next-step env has ended one step before it says so
+            raise ValueError(
+                f"SB3VecEnv: the BatchedEnv's autoreset_mode = {venv.autoreset_mode!r}; SB3 "
+                "resets an env on the step it ends (terminal_observation): make it with "
+                "autoreset_mode='same_step' (the default)"
+            )
         self.venv = venv
         self.render_mode = None
         self.agents_per_env = venv.num_agents

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -28,7 +29,10 @@ def count(least: int) -> Callable[[str], int]:
 
 def output_problem(path: Path, suffix: str | None = None, directory: bool = False) -> str | None:
     """Why ``path`` cannot be written (a file ending in ``suffix``, or a ``directory``), or
-    None. Nothing is created: the nearest existing ancestor must be a writable directory."""
+    None. A file's folder must exist (it is not made for it); a directory is made with its
+    missing parents, so its nearest existing ancestor must take one. Each is tried for real,
+    with a probe made and removed at once (permission bits do not tell root, nor a read-only
+    or virtual file system such as ``/proc``): nothing is left behind."""
     if suffix is not None and path.suffix.lower() != suffix:
         return f"{path} must end in {suffix}"
     if path.exists():
@@ -36,11 +40,27 @@ def output_problem(path: Path, suffix: str | None = None, directory: bool = Fals
             return f"{path} exists and is not a directory"
         if not directory and path.is_dir():
             return f"{path} is a directory"
-    for parent in path.resolve().parents:
+    folder = path.resolve().parent
+    if not directory and not folder.is_dir():
+        what = "is not a directory" if folder.exists() else "does not exist"
+        return f"{path} cannot be written: its folder {folder} {what}"
+    for parent in (path.resolve(), *path.resolve().parents)[0 if directory else 1 :]:
         if parent.exists():
             if not parent.is_dir():
                 return f"{path} cannot be written: {parent} is not a directory"
-            if not os.access(parent, os.W_OK | os.X_OK):
-                return f"{path} cannot be written: {parent} is not writable"
-            break
+            return _probe(path, parent, directory)
+    return None
+
+
+def _probe(path: Path, folder: Path, directory: bool) -> str | None:
+    """Make and remove a directory (or a file) in ``folder``; the reason it failed, or None."""
+    try:
+        if directory:
+            os.rmdir(tempfile.mkdtemp(prefix=".rsvo-probe-", dir=folder))
+        else:
+            fd, name = tempfile.mkstemp(prefix=".rsvo-probe-", dir=folder)
+            os.close(fd)
+            os.remove(name)
+    except OSError as err:
+        return f"{path} cannot be written: {folder}: {err.strerror or err}"
     return None
