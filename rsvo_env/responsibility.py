@@ -45,7 +45,8 @@ def _share(ti: NDArray, tj: NDArray) -> NDArray:
     Where the sum overflows (``1e308 + 1e308`` is inf, which made such a pair's weights sum
     to 2) both scores are halved first: the same share, to rounding. Equal scores give exactly
     1/2 at any magnitude."""
-    total = ti + tj
+    with np.errstate(over="ignore"):  # an overflow is the case handled next, not an error
+        total = ti + tj
     if not np.isfinite(total).all():
         ti, tj = np.broadcast_arrays(ti, tj)
         big = ~np.isfinite(total)

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from checkers import checked
 from pettingzoo.test import api_test, parallel_api_test, render_test
 from pettingzoo.utils.conversions import parallel_to_aec
 
@@ -29,8 +30,8 @@ def make(name, kwargs, filtered, **extra):
 @pytest.mark.parametrize("filtered", [False, True], ids=["bare", "filtered"])
 @pytest.mark.parametrize("name,kwargs", CASES, ids=IDS)
 def test_pettingzoo_api(name, kwargs, filtered):
-    parallel_api_test(make(name, kwargs, filtered), num_cycles=400)
-    api_test(parallel_to_aec(make(name, kwargs, filtered)), num_cycles=400)
+    checked(parallel_api_test, make(name, kwargs, filtered), num_cycles=400)
+    checked(api_test, parallel_to_aec(make(name, kwargs, filtered)), num_cycles=400)
 
 
 @pytest.mark.parametrize("filtered", [False, True], ids=["bare", "filtered"])

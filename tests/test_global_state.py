@@ -5,6 +5,7 @@ import warnings
 
 import numpy as np
 import pytest
+from checkers import checked
 from pettingzoo.test import parallel_api_test, state_test
 
 import rsvo_env
@@ -25,7 +26,7 @@ def test_pettingzoo_state_test_parallel_and_aec(scenario):
             filtered_parallel_env(scenario=scenario),
             num_cycles=100,
         )
-    parallel_api_test(filtered_parallel_env(scenario=scenario), num_cycles=50)
+    checked(parallel_api_test, filtered_parallel_env(scenario=scenario), num_cycles=50)
 
 
 def unpack(sim, state):

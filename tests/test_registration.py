@@ -6,6 +6,7 @@ import gymnasium
 import numpy as np
 import pettingzoo
 import pytest
+from checkers import checked
 from checkout import run_python
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from pettingzoo.test import api_test, parallel_api_test
@@ -30,8 +31,8 @@ def test_gymnasium_and_sb3_checkers(env_id):
 def test_pettingzoo_registry(env_id):
     env = pettingzoo.make("parallel", env_id)
     assert isinstance(env, wrappers.RCBFSafetyFilter)
-    parallel_api_test(env, num_cycles=300)
-    api_test(pettingzoo.make("aec", env_id), num_cycles=300)
+    checked(parallel_api_test, env, num_cycles=300)
+    checked(api_test, pettingzoo.make("aec", env_id), num_cycles=300)
     bare = pettingzoo.make("parallel", env_id, safety_filter=False)
     assert isinstance(bare, rsvo_env.RSVOParallelEnv)
 

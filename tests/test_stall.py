@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from checkers import checked
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -129,4 +130,4 @@ def test_pettingzoo_finds_nothing_wrong_with_the_clock_observed():
     from pettingzoo.test import parallel_api_test
 
     env = rsvo_env.parallel_env("crowd", num_agents=4, num_obs_neighbors=2, stall_clock=3)
-    parallel_api_test(env, num_cycles=200)
+    checked(parallel_api_test, env, num_cycles=200)

@@ -3,6 +3,7 @@ against single envs, and safety under random and adversarial personalities chang
 
 import numpy as np
 import pytest
+from checkers import checked
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -61,8 +62,8 @@ def test_pettingzoo_and_gymnasium_checkers_pass():
         env = rsvo_env.parallel_env("crowd", num_agents=5, max_steps=200, theta_action=True)
         return wrappers.RCBFSafetyFilter(env)
 
-    parallel_api_test(make(), num_cycles=200)
-    api_test(parallel_to_aec(make()), num_cycles=200)
+    checked(parallel_api_test, make(), num_cycles=200)
+    checked(api_test, parallel_to_aec(make()), num_cycles=200)
     joint = wrappers.JointControlEnv("circular_swap", num_agents=4, theta_action=True)
     assert joint.action_space.shape == (12,)
     check_env(joint, skip_render_check=True)

@@ -256,11 +256,12 @@ def test_a_named_activation_reaches_the_policy():
     import torch
     from stable_baselines3 import PPO
 
-    cfg = configs.resolve(configs.load("circular_swap"), num_envs=1)
+    # 8 envs of 6 agents, 32 steps: the rollout fills the config's minibatch of 1,536
+    cfg = configs.resolve(configs.load("circular_swap"), num_envs=8)
     hyper = configs.hyperparameters(cfg)
     assert hyper["policy_kwargs"]["activation_fn"] is torch.nn.ReLU
     assert cfg["ppo"]["policy_kwargs"]["activation_fn"] == "relu"  # the config keeps its name
-    venv = SB3VecEnv(configs.make_env(cfg, num_envs=1))
+    venv = SB3VecEnv(configs.make_env(cfg, num_envs=cfg["num_envs"]))
     model = PPO("MlpPolicy", venv, **hyper)
     layers = list(model.policy.mlp_extractor.policy_net)
     assert [type(m) for m in layers] == [torch.nn.Linear, torch.nn.ReLU] * 2

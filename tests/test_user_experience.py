@@ -119,12 +119,19 @@ def test_the_project_points_nowhere_outside_itself():
 
 
 def test_reference_solvers_are_quiet(capfd):
+    import warnings
+
     from rsvo_env.safety import FilterConfig, SafetyFilter
 
     x = [[0.0, 0.0], [1.5, 0.0], [0.0, 1.5]]
-    SafetyFilter(FilterConfig(solver="osqp")).filter(x, [[3, 0], [-3, 0], [0, -3]], [1, 2, 3])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")  # osqp 1.x warned of renamed settings here
+        for solver in ("osqp", "clarabel", "daqp"):
+            flt = SafetyFilter(FilterConfig(solver=solver))
+            flt.filter(x, [[3, 0], [-3, 0], [0, -3]], [1, 2, 3])
     out = capfd.readouterr()
     assert out.out == "" and out.err == ""
+    assert [str(w.message) for w in caught] == []
 
 
 def test_committed_gifs_play_at_their_frame_rate():

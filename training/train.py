@@ -123,6 +123,7 @@ def train(
     model.save(out / "model.zip")
     final = validation.validate()
     validation.logger.dump(model.num_timesteps)
+    model.logger.close()  # its CSV and TensorBoard files, closed here, not left to the collector
     summary = {
         "agent_steps": int(model.num_timesteps),
         "seconds": round(seconds, 1),

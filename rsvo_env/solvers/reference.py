@@ -34,10 +34,25 @@ SOLVER_OPTIONS: dict[str, dict[str, Any]] = {
         "eps_abs": 1e-9,
         "eps_rel": 1e-9,
         "max_iter": 100000,
-        "polish": True,
         "verbose": False,
     },
 }
+
+
+def _osqp_quiet() -> dict[str, Any]:
+    """osqp's polishing under its own version's name (1.0 renamed ``polish``, warning on the
+    old one) and ``raise_error`` given (1.x warns that its default will change); a failure is
+    read from the solution's status either way."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        major = int(version("osqp").split(".")[0])
+    except (PackageNotFoundError, ValueError):
+        return {}
+    return {"polishing": True, "raise_error": False} if major >= 1 else {"polish": True}
+
+
+SOLVER_OPTIONS["osqp"].update(_osqp_quiet())
 
 
 CLARABEL_DEFAULTS: dict[str, Any] = {"max_iter": 400}
