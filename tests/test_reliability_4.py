@@ -114,6 +114,10 @@ def test_7_readme_names_every_registered_step_limit():
         ("ppo.gamma=1.5", ["ppo.gamma", "1.5"]),
         ("ppo.gae_lambda=-0.1", ["ppo.gae_lambda"]),
         ("ppo.max_grad_norm=0", ["ppo.max_grad_norm"]),
+        ("ppo.learning_rate=-1", ["ppo.learning_rate", "-1", "> 0"]),
+        ("ppo.clip_range=0", ["ppo.clip_range", "> 0"]),
+        ("ppo.ent_coef=-0.1", ["ppo.ent_coef", "-0.1"]),
+        ("ppo.ent_coef=auto", ["ppo.ent_coef", "auto"]),
     ],
 )
 def test_8_values_sb3_would_fail_on_are_refused_before_any_work(tmp_path, capsys, setting,

@@ -175,7 +175,7 @@ def sb3_section(algo: str) -> Check:
     # numbers SB3 would take as a schedule or a float alike
     for name in ("learning_rate", "clip_range", "clip_range_vf", "ent_coef", "target_kl"):
         if name in fields:
-            fields[name] = optional(_number_or_text(name))
+            fields[name] = optional(_number_or_text(name, auto=algo == "sac"))
     fields.update({k: v for k, v in SB3_RANGES.items() if k in fields})
     if algo == "ppo":  # it normalises advantages over a minibatch: at least two samples
         fields["batch_size"] = integer(2)
@@ -198,10 +198,20 @@ SB3_RANGES: dict[str, Check] = {
 }
 
 
-def _number_or_text(name: str) -> Check:
+def _number_or_text(name: str, auto: bool) -> Check:
+    """A rate or a range: a number > 0 (the entropy coefficient >= 0, or with ``auto`` SAC's
+    ``"auto"`` / ``"auto_0.1"``); SB3 fails deep inside on the rest (a negative learning rate in
+    torch's optimiser) or, worse, trains on nonsense."""
+    if name != "ent_coef":
+        return real(positive=True)
+    number = real(0.0, float("inf"))
+
     def check(value: Any, where: str) -> Any:
-        if isinstance(value, str):  # e.g. SAC's ent_coef "auto" / "auto_0.1"
-            return value
-        return real()(value, where)
+        if isinstance(value, str):
+            if auto and (value == "auto" or value.startswith("auto_")):
+                return value
+            what = 'a number >= 0, "auto" or "auto_<initial value>"' if auto else "a number >= 0"
+            raise _fail(where, value, what)
+        return number(value, where)
 
     return check
