@@ -1,7 +1,6 @@
-"""``rsvo reproduce``: the paper's experiments (Sec. V) as one command, tables and figures.
-
-rsvo reproduce: the paper's experiments (Sec. V) as one command: position swap, ramp merge,
-circular game and "who benefits", written as paper.md with its figures and GIFs.
+"""rsvo reproduce: the paper's experiments (Sec. V) as one command: position swap, ramp merge,
+circular game and "who benefits", written as paper.md with its figures and GIFs. Each runs the
+paper's own scripted controller (move-to-goal and the right-hand rule) behind the filter.
 
 Output goes to --out (default ./rsvo-results, where you run the command); a README's results
 block is refreshed only with --readme. Every file written is printed. Every number in paper.md

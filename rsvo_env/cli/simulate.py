@@ -1,5 +1,10 @@
-"""rsvo simulate: run one scenario with the scripted controller behind the R-CBF filter, print
+"""rsvo simulate: run one scenario with its scripted controller behind the R-CBF filter, print
 its episode metrics, and optionally write an animated GIF and a trajectory figure.
+
+The controller is the scenario's own (--nominal default): R-ORCA for the circular swap, the
+crowd, the doorway and the obstacle field; move-to-goal with the right-hand rule, the paper's,
+for the rest. `rsvo reproduce` runs the paper's controller everywhere: give --nominal
+move_to_goal here to see its numbers.
 
 example: rsvo simulate circular_swap --theta 2 1 2 1 2 1 --gif circular.gif --png circular.png
 """
@@ -16,6 +21,7 @@ import rsvo_env
 from rsvo_env.cli.arguments import count
 from rsvo_env.cli.main import Parser, check_output, user_input
 from rsvo_env.rendering import save_gif
+from rsvo_env.scenario import NOMINALS
 
 
 class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
@@ -89,6 +95,11 @@ def main(argv: list[str] | None = None) -> int:
         choices=["asymmetric", "symmetric"],
         help="asymmetric: the paper's R-SVO weights; symmetric: 0.5 for every pair",
     )
+    ap.add_argument(
+        "--nominal",
+        choices=NOMINALS,
+        help="the scripted controller (default: the scenario's own, see above)",
+    )
     ap.add_argument("--theta", type=float, nargs="+", help="personality scores >= 0, one per agent")
     ap.add_argument("--seed", type=count(0), default=0, help="seed of the episode")
     ap.add_argument("--gif", type=Path, help="write an animated GIF here (.gif)")
@@ -104,6 +115,7 @@ def main(argv: list[str] | None = None) -> int:
         theta=args.theta,
         seed=args.seed,
         gif=args.gif,
+        **({} if args.nominal is None else {"nominal": args.nominal}),
     )
     for key in (
         "steps",
