@@ -182,6 +182,22 @@ def save_gif(frames: Sequence[NDArray[np.uint8]], path: str | Path, fps: int = 2
 
 
 MARK_STYLES = (":", "-.", "--")
+OBSTACLE_GREY = (0.55, 0.55, 0.55)
+
+
+def _capsule_patch(ax: Any, cap: NDArray) -> None:
+    """One obstacle (x0, y0, x1, y1, radius) at its true size: a disc, or a segment of that
+    half-thickness with round ends."""
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Polygon
+
+    a, b, r = np.asarray(cap[:2]), np.asarray(cap[2:4]), float(cap[4])
+    for end in (a, b):
+        ax.add_patch(plt.Circle(end, r, color=OBSTACLE_GREY, lw=0))
+    d = b - a
+    if np.hypot(*d) > 0:
+        n = np.array([-d[1], d[0]]) / np.hypot(*d) * r
+        ax.add_patch(Polygon([a + n, b + n, b - n, a - n], color=OBSTACLE_GREY, lw=0))
 
 
 def marker_handles(mark_labels: Sequence[str] = ()) -> list[Any]:
@@ -215,6 +231,7 @@ def plot_trajectories(
     mark_labels: Sequence[str] = (),
     legend: bool | str = True,
     colorbar: bool = True,
+    obstacles: NDArray | None = None,
 ) -> Any:
     """A figure like the paper's, readable without the code: each agent's path (dashed, coloured
     by theta from egoist red to altruist blue, with a colour bar), its start (hollow circle), its
@@ -222,15 +239,20 @@ def plot_trajectories(
     ``marks`` are steps at which the agents are also drawn (faded discs), named by
     ``mark_labels`` in the legend (e.g. deadlock onset, resolution). ``legend="agents"`` keeps
     only the agents' entries (for panels that share :func:`marker_handles` in one figure legend).
+    ``obstacles`` (O, 5): capsules, drawn grey at their true size. Equal scores have no colour
+    scale to show: the bar is left out and the legend names the one theta.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import LinearSegmentedColormap, Normalize
+    from matplotlib.patches import Patch
 
     if ax is None:
-        _, ax = plt.subplots(figsize=(6.5, 5.5))
+        _, ax = plt.subplots(figsize=(6.5, 5.5), layout="constrained")
+    for cap in () if obstacles is None else obstacles:
+        _capsule_patch(ax, cap)
     theta = np.asarray(theta, dtype=float)
     colors = theta_colors(theta) / 255.0
     styles = MARK_STYLES
@@ -256,15 +278,18 @@ def plot_trajectories(
         ax.legend(handles=handles, fontsize=6, loc="upper left")
     elif legend:
         handles += marker_handles(mark_labels)
-        # below the axes, where it hides no path
-        ax.legend(
-            handles=handles, fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2
-        )
-    if colorbar:
+        if obstacles is not None and len(obstacles):
+            handles.append(Patch(color=OBSTACLE_GREY, label="obstacle"))
+        ncol = 2 if len(handles) <= 12 else 3
+        if ax.figure.get_layout_engine() is not None:
+            # below the axes and their labels, placed by the layout: it hides no path, no label
+            ax.figure.legend(handles=handles, fontsize=6, loc="outside lower center", ncol=ncol)
+        else:
+            ax.legend(handles=handles, fontsize=6, loc="upper center",
+                      bbox_to_anchor=(0.5, -0.13), ncol=ncol)  # fmt: skip
+    if colorbar and theta.max() > theta.min():
         cmap = LinearSegmentedColormap.from_list("theta", [EGOIST / 255.0, ALTRUIST / 255.0])
-        lo, hi = float(theta.min()), float(theta.max())
-        # equal scores sit in the middle of the bar, as they are drawn (theta_scale 0.5)
-        norm = Normalize(lo, hi) if hi > lo else Normalize(lo - 1.0, lo + 1.0)
+        norm = Normalize(float(theta.min()), float(theta.max()))
         bar = ax.figure.colorbar(plt.cm.ScalarMappable(norm, cmap), ax=ax, shrink=0.8)
         bar.set_label("theta: red egoist (small), blue altruist (large)", fontsize=7)
     if title:

@@ -100,6 +100,8 @@ class World:
     goals = property(lambda self: self._row("goals"))
     starts = property(lambda self: self._row("starts"))
     theta = property(lambda self: self._row("theta"))
+    # (O, 5) the obstacles as capsules, x0, y0, x1, y1, radius (rsvo_env.obstacles)
+    obstacles = property(lambda self: self._row("obstacles"))
 
     @property
     def omega(self) -> NDArray[np.float64]:

@@ -71,3 +71,27 @@ def test_gif_and_figure_by_one_command(tmp_path):
 def test_demo_command(capsys):
     assert cli.main(["demo"]) == 0
     assert "smallest distance kept" in capsys.readouterr().out
+
+
+def test_trajectory_figures_draw_their_obstacles_and_keep_the_legend_off_the_labels(tmp_path):
+    """The doorway's figure drew paths bending round nothing, its legend covered the x label and
+    its colour bar spanned 0-2 when every theta is 1."""
+    import matplotlib.pyplot as plt
+
+    from rsvo_env.cli.figures import episode
+    from rsvo_env.cli.simulate import run
+    from rsvo_env.rendering import OBSTACLE_GREY
+
+    for scenario, kwargs in (("doorway", {}), ("obstacle_field", {"max_steps": 60})):
+        out = run(scenario, **kwargs)
+        fig = episode(out, scenario, "asymmetric")
+        fig.savefig(tmp_path / f"{scenario}.png")
+        ax = fig.axes[0]
+        grey = [p for p in ax.patches if p.get_facecolor()[:3] == OBSTACLE_GREY]
+        assert len(grey) >= len(out["obstacles"]) > 0
+        renderer = fig.canvas.get_renderer()
+        legend = fig.legends[0].get_window_extent(renderer)
+        label = ax.xaxis.label.get_window_extent(renderer)
+        assert not legend.overlaps(label)
+        assert len(fig.axes) == 1  # every theta is 1: no colour bar to span a made-up range
+        plt.close(fig)

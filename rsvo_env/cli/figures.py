@@ -106,6 +106,7 @@ def episode(out: dict, scenario: str, weighting: str, filtered: bool = True) -> 
         mark_labels=labels,
         title=f"{scenario}, theta = ({theta}), {weighting} weighting, "
         + ("filter on" if filtered else "no filter"),
+        obstacles=out.get("obstacles"),
     )
 
 

@@ -67,6 +67,7 @@ def run(
     out["trajectory"] = np.stack(base.history)
     out["theta"] = base.world.theta.copy()
     out["goals"] = base.world.goals.copy()
+    out["obstacles"] = base.world.obstacles.copy()
     out["safety_radius"] = base.world.safety_radius
     if gif:
         fps = max(1, int(round(1.0 / (base.dt * gif_every))))
