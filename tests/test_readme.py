@@ -39,3 +39,18 @@ def test_property_tests_are_derandomized_unless_exploring():
     assert "--hypothesis-profile=explore" in README
     assert settings.default.derandomize and settings.default.database is None
     assert not settings.get_profile("explore").derandomize
+
+
+SCENARIOS_DOC = (Path(__file__).resolve().parents[1] / "docs" / "scenarios.md").read_text()
+SCENARIO_BLOCKS = re.findall(r"```python\n(.*?)```", SCENARIOS_DOC, flags=re.S)
+
+
+@pytest.mark.parametrize("index", range(len(SCENARIO_BLOCKS)))
+def test_scenarios_doc_block_runs(index, capsys):
+    """docs/scenarios.md's custom scene runs as written, with no collision."""
+    exec(compile(SCENARIO_BLOCKS[index], f"docs/scenarios.md block {index}", "exec"), {})
+    assert capsys.readouterr().out.startswith("True 0 ")
+
+
+def test_scenarios_doc_has_a_custom_scene_in_code():
+    assert any('parallel_env("custom"' in b for b in SCENARIO_BLOCKS)

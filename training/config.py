@@ -8,33 +8,17 @@ SB3. The resolved config is saved beside the model and is all :mod:`training.eva
 from __future__ import annotations
 
 import copy
-import re
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from rsvo_env.cli.scene_file import load_yaml
 from rsvo_env.vector import BatchedEnv
 from training import schema
 
 CONFIG_DIR = Path(__file__).parent / "configs"
 
-
-class _Loader(yaml.SafeLoader):
-    """PyYAML's safe loader with YAML 1.2's floats: ``1e9`` and ``1E-3`` are numbers, as a user
-    writes them (YAML 1.1, which PyYAML follows, reads them as strings without a dot)."""
-
-
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."),
-)
-
-
-def load_yaml(text: Any) -> Any:
-    """A YAML document (a string or a file), numbers read as YAML 1.2 reads them."""
-    return yaml.load(text, Loader=_Loader)  # noqa: S506  (a SafeLoader)
 ALGOS = ("ppo", "sac")
 ACTIONS = ("direct", "residual")
 WEIGHTINGS = ("asymmetric", "symmetric")

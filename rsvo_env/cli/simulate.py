@@ -19,7 +19,8 @@ import numpy as np
 
 import rsvo_env
 from rsvo_env.cli.arguments import count
-from rsvo_env.cli.main import Parser, check_output, user_input
+from rsvo_env.cli.main import Parser, UserError, check_output, user_input
+from rsvo_env.cli.scene_file import read_scene
 from rsvo_env.rendering import save_gif
 from rsvo_env.scenario import NOMINALS
 
@@ -87,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         nargs="?",
         default="circular_swap",
         choices=sorted(rsvo_env.SCENARIOS),
-        help="which of the paper's scenarios",
+        help="which scenario (custom: give --scene)",
     )
     ap.add_argument("--no-filter", action="store_true", help="run without the safety filter")
     ap.add_argument(
@@ -102,6 +103,12 @@ def main(argv: list[str] | None = None) -> int:
         help="the scripted controller (default: the scenario's own, see above)",
     )
     ap.add_argument("--theta", type=float, nargs="+", help="personality scores >= 0, one per agent")
+    ap.add_argument(
+        "--scene",
+        type=Path,
+        help="custom: your scene, a YAML or JSON mapping of its keywords (starts, goals, radii, "
+        "circles, walls, thickness, dynamics, u_max, a_max, ...; docs/scenarios.md)",
+    )
     ap.add_argument("--seed", type=count(0), default=0, help="seed of the episode")
     ap.add_argument("--gif", type=Path, help="write an animated GIF here (.gif)")
     ap.add_argument("--png", type=Path, help="write a trajectory figure here (.png)")
@@ -109,6 +116,14 @@ def main(argv: list[str] | None = None) -> int:
     # formats and folders are checked before any work
     check_output(args.gif, ".gif")
     check_output(args.png, ".png")
+    scene: dict[str, Any] = {}
+    if (args.scene is None) != (args.scenario != "custom"):
+        raise UserError("--scene FILE goes with the custom scenario (and custom needs one)")
+    if args.scene is not None:
+        with user_input():
+            scene = read_scene(args.scene)
+        if "nominal" in scene and args.nominal is not None:
+            raise UserError("the controller is given twice: --nominal and the scene's nominal")
     out = run(
         args.scenario,
         safety_filter=not args.no_filter,
@@ -117,6 +132,7 @@ def main(argv: list[str] | None = None) -> int:
         seed=args.seed,
         gif=args.gif,
         **({} if args.nominal is None else {"nominal": args.nominal}),
+        **scene,
     )
     for key in (
         "steps",
