@@ -130,7 +130,8 @@ def test_figures_explain_themselves(runs):
         out["trajectory"], out["goals"], out["theta"], 1.0, marks=marks, mark_labels=labels
     )
     ax = fig.axes[0]
-    entries = [t.get_text() for t in ax.get_legend().get_texts()]
+    legend = ax.get_legend() or fig.legends[0]  # below the axes, placed by the layout
+    entries = [t.get_text() for t in legend.get_texts()]
     assert "agent 1: theta = 2 (altruist)" in entries
     assert "agent 2: theta = 1 (egoist)" in entries
     for text in ("start", "goal", "path", "final position (disc: R/2; number: agent)"):
