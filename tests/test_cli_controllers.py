@@ -1,5 +1,7 @@
-"""Which scripted controller each command runs, as README and ``--help`` say: ``rsvo simulate``
+"""Which scripted controller each command runs, as docs/cli.md and ``--help`` say: ``rsvo simulate``
 the scenario's own (``--nominal`` chooses), ``rsvo reproduce`` the paper's."""
+
+from pathlib import Path
 
 import pytest
 
@@ -15,11 +17,13 @@ def metrics(capsys, args):
 
 
 def test_simulate_runs_the_scenarios_controller_and_nominal_chooses(capsys):
-    """README's numbers: the paper's controller 138 / 278 / 489 (what reproduce reports),
+    """docs/cli.md's numbers: the paper's controller 138 / 278 / 489 (what reproduce reports),
     R-ORCA, the circular swap's own, 216 / 297 / 505."""
     assert metrics(capsys, ["--nominal", "move_to_goal"]) == [138, 278, 489]
     assert metrics(capsys, []) == [216, 297, 505]
     assert metrics(capsys, ["--nominal", "rorca"]) == [216, 297, 505]
+    doc = " ".join((Path(__file__).parents[1] / "docs" / "cli.md").read_text().split())
+    assert "138 / 278 / 489" in doc and "216 / 297 / 505" in doc
 
 
 def test_simulate_refuses_a_controller_the_model_cannot_take(capsys):

@@ -1,0 +1,140 @@
+"""Writes the site's gallery: a page per registered id (its picture, its GIF, its parameters,
+how to make it) and the gallery page that shows them all.
+
+    python docs/gallery.py            # the pages and every picture (about two minutes)
+    python docs/gallery.py --pages    # the pages alone (what tests/test_docs.py checks)
+
+The pages come from the code (each scenario's docstring and defaults, the registry's ids and
+step limits), so they cannot drift from it: the tests regenerate them and compare. The
+pictures are one episode of seed 0 under the scenario's own scripted controller behind the
+filter, the same as ``rsvo simulate NAME --png ... --gif ...``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parent
+IMAGES = DOCS / "images"
+PAGES = DOCS / "scenarios"
+
+
+def registered() -> dict[str, str]:
+    """Every registered id and its scenario, in the registry's order."""
+    from rsvo_env.registration import IDS
+
+    return dict(IDS)
+
+
+def title(scenario: str) -> str:
+    return scenario.replace("_", " ").capitalize()
+
+
+def scenario_page(env_id: str, scenario: str) -> str:
+    """The page of one id, from its scenario's docstring and defaults."""
+    from rsvo_env.scenarios import SCENARIOS
+
+    cls = SCENARIOS[scenario]
+    about = " ".join(inspect.cleandoc(cls.__doc__ or "").split())
+    rows = "\n".join(f"| `{k}` | `{v!r}` |" for k, v in cls.defaults.items())
+    return f"""# {title(scenario)}: `{env_id}`
+
+{about}
+
+![{title(scenario)}, one episode](../images/{scenario}.gif)
+
+One episode, seed 0, under the scenario's own scripted controller behind the filter (the same
+as `rsvo simulate {scenario} --gif {scenario}.gif --png {scenario}.png`); its paths:
+
+![{title(scenario)}, the paths of that episode](../images/{scenario}.png)
+
+## Make it
+
+```python
+import gymnasium, rsvo_env
+
+env = gymnasium.make("{env_id}")  # one controller for every agent, the filter on
+obs, info = env.reset(seed=0)
+for _ in range(50):
+    obs, reward, terminated, truncated, info = env.step(env.unwrapped.nominal_action())
+print(obs.shape, reward)
+```
+
+One policy per agent: `pettingzoo.make("parallel", "{env_id}")` or
+`rsvo_env.parallel_env("{scenario}")` (the filter off) behind `wrappers.RCBFSafetyFilter`; many
+envs at once: `BatchedEnv("{scenario}", num_envs=...)` ([Many envs at once](../batched.md)).
+
+## Parameters
+
+Every one is a keyword of `gymnasium.make`, `rsvo_env.parallel_env` and `BatchedEnv`; an
+unknown keyword raises `TypeError` naming it. What each means: [Scenarios](../scenarios.md).
+The registered id's step limit is `max_steps`.
+
+| keyword | default |
+|---|---|
+{rows}
+"""
+
+
+def gallery_page(ids: dict[str, str]) -> str:
+    cards = "\n\n".join(
+        f"-   **[`{env_id}`](scenarios/{scenario}.md)**\n\n"
+        f"    ---\n\n"
+        f"    [![{title(scenario)}](images/{scenario}.png)](scenarios/{scenario}.md)"
+        for env_id, scenario in ids.items()
+    )
+    return f"""# Gallery
+
+Every registered id, one episode of seed 0 under its scripted controller behind the filter: the
+paths from the open circles (starts) to the crosses (goals), each agent's disc where it ended.
+A click opens the id's page, with its animation and its parameters. Your own scene:
+[custom scenes](scenarios.md#custom-scenes).
+
+<div class="grid cards" markdown>
+
+{cards}
+
+</div>
+"""
+
+
+def write_pages() -> list[Path]:
+    ids = registered()
+    PAGES.mkdir(exist_ok=True)
+    written = []
+    for env_id, scenario in ids.items():
+        path = PAGES / f"{scenario}.md"
+        path.write_text(scenario_page(env_id, scenario))
+        written.append(path)
+    (DOCS / "gallery.md").write_text(gallery_page(ids))
+    return [*written, DOCS / "gallery.md"]
+
+
+def write_images() -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from rsvo_env.cli.figures import episode
+    from rsvo_env.cli.simulate import run
+
+    IMAGES.mkdir(exist_ok=True)
+    for scenario in registered().values():
+        out = run(scenario, gif=IMAGES / f"{scenario}.gif", gif_every=10, render_size=300)
+        fig = episode(out, scenario, "asymmetric", filtered=True)
+        fig.savefig(IMAGES / f"{scenario}.png", dpi=80, bbox_inches="tight")
+        plt.close(fig)
+        print(scenario, out["steps"], "steps,", out["n_collision_steps"], "collision steps")
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pages", action="store_true", help="the pages alone, no pictures")
+    args = ap.parse_args()
+    for path in write_pages():
+        print(path.relative_to(DOCS.parent))
+    if not args.pages:
+        write_images()
