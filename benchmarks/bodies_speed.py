@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
 ROOT = Path(__file__).resolve().parents[1]
 

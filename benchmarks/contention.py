@@ -39,7 +39,7 @@ CORES = os.cpu_count() or 1
 
 def worker(workload: str, seconds: float) -> None:
     """One process: warm up, then step for ``seconds``; prints its agent-steps per second."""
-    from rsvo_env.vector import BatchedEnv
+    from rsvo_env.envs.vector import BatchedEnv
 
     e, n = WORKLOADS[workload]
     env = BatchedEnv("crowd", num_envs=e, num_agents=n, safety_filter=True,
@@ -84,8 +84,8 @@ def kernel_threshold(sizes=(64, 128, 256, 512, 1024, 4096), repeats: int = 200) 
     """Microseconds of one solve of n QPs (8 rows each), on one thread (the form the library
     takes for n there, ``docs/threads.md``) and with the pool (forced at every n: the threshold
     lowered to 0 for the measurement)."""
-    from rsvo_env import threads
-    from rsvo_env.solvers import exact
+    from rsvo_env.qp import exact
+    from rsvo_env.util import threads
 
     rng = np.random.default_rng(0)
     box = np.array([2.0, 2.0])

@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rsvo_env.filter_config import FilterConfig
-from rsvo_env.nominal import move_to_goal
-from rsvo_env.safety import SafetyFilter
+from rsvo_env.control.nominal import move_to_goal
+from rsvo_env.filter import dense
+from rsvo_env.filter.config import FilterConfig
+from rsvo_env.filter.safety import SafetyFilter
 from rsvo_env.scenarios import Crowd
-from rsvo_env.solvers import dense
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZES = (32, 64, 100, 150, 200, 256, 300, 350, 512)

@@ -30,11 +30,11 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from backup_states import drive, into_safe_set, safe_crowd, track  # noqa: E402
 
-from rsvo_env.cli.simulate import run  # noqa: E402
+from rsvo_env.cli.episode import run  # noqa: E402
 from rsvo_env.cli.studies.ramp_merge import CASES, first_step, first_through  # noqa: E402
 from rsvo_env.dynamics import double_integrator_step  # noqa: E402
-from rsvo_env.neighbors import nearest_distance  # noqa: E402
-from rsvo_env.safety import FilterConfig, SafetyFilter  # noqa: E402
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter  # noqa: E402
+from rsvo_env.util.neighbors import nearest_distance  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
 # (N, dt, gamma dt, scale, initial speed)

@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 from single_env_speed import best
 
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs.vector import BatchedEnv
 
 ROOT = Path(__file__).resolve().parents[1]
 BATCH_SIZES = ((4, 256), (16, 32), (16, 256), (64, 32))

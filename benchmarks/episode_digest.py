@@ -6,7 +6,7 @@ hashed).
     python benchmarks/episode_digest.py > before.txt   # at one commit
     python benchmarks/episode_digest.py | diff before.txt -   # at another
 
-Only public paths are used (``rsvo_env.parallel_env``, ``rsvo_env.vector.BatchedEnv``,
+Only public paths are used (``rsvo_env.parallel_env``, ``rsvo_env.envs.vector.BatchedEnv``,
 ``wrappers``), so the script runs unchanged across a move of the library's modules.
 """
 
@@ -23,7 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import rsvo_env  # noqa: E402
 import wrappers  # noqa: E402
-from rsvo_env.vector import BatchedEnv  # noqa: E402
+from rsvo_env.envs.vector import BatchedEnv  # noqa: E402
 
 STEPS = 300
 SCENE = dict(

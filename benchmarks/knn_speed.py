@@ -1,4 +1,4 @@
-"""The k-nearest-neighbour kernels of ``rsvo_env.neighbors``, each timed on the same batches.
+"""The k-nearest-neighbour kernels of ``rsvo_env.util.neighbors``, each timed on the same batches.
 
 Every (envs E, agents N, k) cell times insertion, ranking and env lanes on the same positions,
 one thread, alternating bursts, the best of ``--repeats``; and names the kernel that
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rsvo_env import neighbors
+from rsvo_env.util import neighbors
 
 ROOT = Path(__file__).resolve().parents[1]
 KERNELS = {

@@ -42,10 +42,10 @@ from liveness_report import (  # a sibling module: benchmarks/ is the script's o
     write,
 )
 
-from rsvo_env.neighbors import nearest_distance
-from rsvo_env.nominal import move_to_goal
+from rsvo_env.control.nominal import move_to_goal
+from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.scenarios import paired_theta
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.util.neighbors import nearest_distance
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"

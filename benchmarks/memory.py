@@ -39,15 +39,15 @@ def scores(n: int, case: str) -> np.ndarray:
 
 def footprint(n: int, case: str) -> dict:
     """In this process: pairs and bytes of one filter call on a crowd of n."""
-    from rsvo_env import pairs
-    from rsvo_env.safety import FilterConfig, SafetyFilter
+    from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+    from rsvo_env.geometry import pairs
     from rsvo_env.scenarios import Crowd
 
     x = Crowd(num_agents=n, spacing_factor=1.0)._spread(np.random.default_rng(n))
     theta = scores(n, case)
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0, dt=0.01))
     # every agent at full speed in a random direction (at rest no row beyond the safe
-    # distance can bind: rsvo_env.projection_disk)
+    # distance can bind: rsvo_env.filter.projection_disk)
     angle = np.random.default_rng(0).uniform(0.0, 2.0 * np.pi, n)
     nominal = 2.0 * np.stack([np.cos(angle), np.sin(angle)], axis=-1)
     rows = flt.filter(x, nominal, theta).rows
@@ -69,7 +69,7 @@ def footprint(n: int, case: str) -> dict:
 def resident_child(n: int, case: str) -> None:
     """Run in a fresh process: print the resident memory (MB) an n-agent env adds (built, reset,
     five steps) to a process that compiled every kernel on a small crowd first."""
-    from rsvo_env.vector import BatchedEnv
+    from rsvo_env.envs.vector import BatchedEnv
 
     # compile every kernel on a small crowd of the same kind, so what is measured is the crowd's own
     small = BatchedEnv("crowd", num_envs=1, nominal="move_to_goal", num_agents=200)
@@ -104,7 +104,7 @@ def resident(n: int, case: str) -> float:
 
 def step_ratios(n: int, blocks: int = 3, steps: int = 3) -> dict[str, float]:
     """Step time of each case over theta 1..10's, alternating blocks in this process."""
-    from rsvo_env.vector import BatchedEnv
+    from rsvo_env.envs.vector import BatchedEnv
 
     envs = {}
     for case in CASES:

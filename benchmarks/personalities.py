@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from liveness_report import replace_section  # a sibling module: benchmarks/ is the path
 
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs.vector import BatchedEnv
 from training.config import limit_threads
 from training.evaluate import load_model
 from training.evaluation import run_episodes

@@ -31,14 +31,15 @@ from pathlib import Path
 
 import numpy as np
 
-from rsvo_env import pairs
-from rsvo_env.bodies import Bodies
+from rsvo_env.control.nominal import move_to_goal
 from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.neighbors import nearest_distance
-from rsvo_env.nominal import move_to_goal
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter import dense
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.geometry import pairs
+from rsvo_env.geometry.bodies import Bodies
+from rsvo_env.qp import exact
 from rsvo_env.scenarios import Crowd
-from rsvo_env.solvers import dense, exact
+from rsvo_env.util.neighbors import nearest_distance
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import scaling_report as report  # noqa: E402
@@ -215,7 +216,7 @@ def big_crowd(mode: str, n: int, steps: int) -> dict:
     base = peak = rss()
     t0 = time.perf_counter()
     if mode == "env":
-        from rsvo_env.vector import BatchedEnv
+        from rsvo_env.envs.vector import BatchedEnv
 
         venv = BatchedEnv("crowd", num_envs=1, num_agents=n, max_cycles=steps + 1,
                           nominal="move_to_goal")  # the move-to-goal of section 1

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rsvo_env.cli.simulate import run
+from rsvo_env.cli.episode import run
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = {

@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from instances import make_batch, stack  # noqa: E402
 
-from rsvo_env.solvers import exact, reference  # noqa: E402
+from rsvo_env.qp import exact, reference  # noqa: E402
 
 REFERENCES = ("clarabel", "daqp", "osqp")
 

@@ -29,7 +29,7 @@ import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import VecMonitor
 
-from rsvo_env.safety import SafetyFilter
+from rsvo_env.filter.safety import SafetyFilter
 from training import config as configs
 from wrappers.sb3 import SB3VecEnv
 

@@ -23,7 +23,7 @@ PAGES = DOCS / "scenarios"
 
 def registered() -> dict[str, str]:
     """Every registered id and its scenario, in the registry's order."""
-    from rsvo_env.registration import IDS
+    from rsvo_env.envs.registration import IDS
 
     return dict(IDS)
 
@@ -118,8 +118,8 @@ def write_images() -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from rsvo_env.cli.episode import run
     from rsvo_env.cli.figures import episode
-    from rsvo_env.cli.simulate import run
 
     IMAGES.mkdir(exist_ok=True)
     for scenario in registered().values():

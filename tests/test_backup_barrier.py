@@ -10,11 +10,12 @@ from backup_states import drive, into_safe_set, obstacle_h, pair_h, safe_crowd
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rsvo_env import backup_barrier as bb
-from rsvo_env import pairs, solvers
+from rsvo_env.dynamics import backup_barrier as bb
 from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.obstacles import Obstacles
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.geometry import pairs
+from rsvo_env.geometry.obstacles import Obstacles
+from rsvo_env.qp import solve as solvers
 
 TOL = 1e-9  # relative: a pair counts as touching below (r_i + r_j)(1 - TOL)
 scales = st.sampled_from([1e-3, 1.0, 1e3])
@@ -291,7 +292,7 @@ def test_continuous_time_rows_admit_the_backup():
 def test_backup_is_the_default_and_walls_need_it():
     cfg = FilterConfig(dynamics="double_integrator", dt=0.05)
     assert cfg.barrier == "backup"
-    from rsvo_env.scenes import Scene
+    from rsvo_env.scenarios.scenes import Scene
 
     kw = {"starts": [[0, 0], [10, 0]], "goals": [[10, 0], [0, 0]], "dynamics": "double_integrator",
           "walls": [((5, 3), (5, 8))]}  # fmt: skip

@@ -8,9 +8,9 @@ import pytest
 from backup_states import pair_h
 from test_backup_barrier import config
 
-from rsvo_env import backup_barrier as bb
+from rsvo_env.dynamics import backup_barrier as bb
 from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.safety import SafetyFilter
+from rsvo_env.filter.safety import SafetyFilter
 
 
 @pytest.mark.parametrize("speed_over_c_dt", [1e2, 1e6, 1e8, 1e9, 1e10])

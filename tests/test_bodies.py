@@ -6,10 +6,11 @@ and the reference solver in agreement, in any units."""
 import numpy as np
 import pytest
 
-from rsvo_env import pairs, solvers
-from rsvo_env.bodies import Bodies
-from rsvo_env.safety import FilterConfig, SafetyFilter
-from rsvo_env.solvers import dense as dense_solver
+from rsvo_env.filter import dense as dense_solver
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.geometry import pairs
+from rsvo_env.geometry.bodies import Bodies
+from rsvo_env.qp import solve as solvers
 
 
 def scene(n: int, seed: int, scale: float = 1.0):

@@ -7,7 +7,7 @@ import copy
 import pytest
 
 from rsvo_env.cli import main as rsvo
-from rsvo_env.env import RSVOParallelEnv
+from rsvo_env.envs.parallel import RSVOParallelEnv
 from training import config as configs
 from training import evaluate, train
 

@@ -10,7 +10,7 @@ import pytest
 
 import rsvo_env
 import wrappers
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs.vector import BatchedEnv
 
 
 def copies(env):

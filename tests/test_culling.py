@@ -7,10 +7,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env import barriers, grid, pairs
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.dynamics import barriers
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.geometry import pairs
+from rsvo_env.qp import exact
 from rsvo_env.scenarios import Crowd
-from rsvo_env.solvers import exact
+from rsvo_env.util import grid
 
 
 def crowd(n, seed):
@@ -19,7 +21,7 @@ def crowd(n, seed):
 
 def moving(n, seed, u_max=2.0):
     """Nominal actions at full speed in random directions: every agent going somewhere (at
-    rest, the filter examines nothing beyond the safe distance, rsvo_env.projection_disk)."""
+    rest, the filter examines nothing beyond the safe distance, rsvo_env.filter.projection_disk)."""
     angle = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi, n)
     return u_max * np.stack([np.cos(angle), np.sin(angle)], axis=-1)
 
@@ -202,7 +204,7 @@ def test_double_integrator_crowd_examines_few_pairs():
 
 def swapped_weights(theta):
     """A callable weighting: the R-SVO weights with the roles of egoist and altruist swapped."""
-    from rsvo_env.responsibility import weight_matrix
+    from rsvo_env.responsibility.svo import weight_matrix
 
     w = 1.0 - weight_matrix(theta)
     np.fill_diagonal(w, 0.0)

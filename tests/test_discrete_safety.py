@@ -7,7 +7,7 @@ h+ = h + 2 dt dx.(u_i - u_j) + dt^2 |u_i - u_j|^2 >= (1 - gamma dt) h >= 0.
 import numpy as np
 import pytest
 
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
 
 def crossing_scenario(rng: np.random.Generator) -> dict:

@@ -5,9 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env import barriers
-from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.dynamics import barriers, double_integrator_step
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
 A_MAX, DS = 5.0, 5.0
 LO, HI = np.full(2, -A_MAX), np.full(2, A_MAX)

@@ -10,8 +10,8 @@ from instances import converging_pair
 from test_bodies import all_pairs_actions
 
 from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.obstacles import Obstacles
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.geometry.obstacles import Obstacles
 
 
 def pair_h(p, v, radii, a):

@@ -9,8 +9,8 @@ import pytest
 
 from rsvo_env import dynamics
 from rsvo_env.dynamics import DoubleIntegrator, SingleIntegrator
-from rsvo_env.safety import FilterConfig, SafetyFilter
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
 ROOT = Path(__file__).resolve().parents[1]
 

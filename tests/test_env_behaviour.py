@@ -76,7 +76,7 @@ def test_nominal_episode_is_deterministic_to_the_end():
 def test_per_agent_episode_values_are_the_batched_flat_values():
     """The single env's per-agent ``episode_*`` infos hold the same values and types as the
     core's (E,) ``flat()`` arrays, at every step of an episode with collisions and arrivals."""
-    from rsvo_env.metrics import FLAT_FIELDS
+    from rsvo_env.sim.metrics import FLAT_FIELDS
 
     env = rsvo_env.parallel_env("position_swap", theta=(1.0, 1.0))
     env.reset(seed=0)

@@ -8,10 +8,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_culling import all_pairs_actions, crowd, moving
 
-from rsvo_env import pairs
-from rsvo_env.neighbors import DENSE_MAX_AGENTS
-from rsvo_env.responsibility import weight_matrix
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.geometry import pairs
+from rsvo_env.responsibility.svo import weight_matrix
+from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
 
 
 @settings(max_examples=200, deadline=None)

@@ -9,10 +9,10 @@ from checkers import checked
 from pettingzoo.test import parallel_api_test, state_test
 
 import rsvo_env
-from rsvo_env import global_state
-from rsvo_env.registration import IDS
-from rsvo_env.responsibility import responsibility_weight
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs import global_state
+from rsvo_env.envs.registration import IDS
+from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.responsibility.svo import responsibility_weight
 from wrappers.safety_filter import filtered_aec_env, filtered_parallel_env
 
 

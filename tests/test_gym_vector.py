@@ -7,7 +7,7 @@ import torch
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.wrappers.vector import ClipAction, NormalizeObservation, RecordEpisodeStatistics
 
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs.vector import BatchedEnv
 from wrappers import GymnasiumVectorEnv
 
 SMALL = {"num_agents": 4, "max_steps": 25}

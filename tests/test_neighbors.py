@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env import neighbors
-from rsvo_env.neighbors import _knn_inserted, _knn_lanes, _knn_ranked, nearest_neighbors
+from rsvo_env.util import neighbors
+from rsvo_env.util.neighbors import _knn_inserted, _knn_lanes, _knn_ranked, nearest_neighbors
 
 
 def reference(x: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:

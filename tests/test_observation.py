@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import rsvo_env
-from rsvo_env import observation
+from rsvo_env.sim import observation
 
 
 def reference(world, k: int, frame: str) -> np.ndarray:

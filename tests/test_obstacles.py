@@ -6,11 +6,12 @@ refused by name."""
 import numpy as np
 import pytest
 
-from rsvo_env import pairs, solvers
-from rsvo_env.bodies import Bodies
-from rsvo_env.obstacles import Obstacles, single_integrator_obstacle_rows
-from rsvo_env.rows import with_obstacles
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.geometry import pairs
+from rsvo_env.geometry.bodies import Bodies
+from rsvo_env.geometry.obstacles import Obstacles, single_integrator_obstacle_rows
+from rsvo_env.qp import solve as solvers
+from rsvo_env.qp.rows import with_obstacles
 
 
 def field(seed: int, n: int, scale: float = 1.0):

@@ -3,7 +3,7 @@ batch of assignments x seeds equals the episodes run one at a time."""
 
 import numpy as np
 
-from rsvo_env.cli.simulate import run
+from rsvo_env.cli.episode import run
 from training.personalities import PAPER_GAME, alternating, evaluate, objective
 
 

@@ -19,7 +19,7 @@ import warnings
 warnings.simplefilter("ignore")
 import pettingzoo, gymnasium
 import rsvo_env, wrappers
-from rsvo_env.registration import HAS_REGISTRY
+from rsvo_env.envs.registration import HAS_REGISTRY
 from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test, state_test
 from wrappers.safety_filter import filtered_aec_env, filtered_parallel_env
 assert pettingzoo.__version__ == "{version}", pettingzoo.__version__
@@ -90,7 +90,7 @@ def test_too_old_pettingzoo_is_refused_naming_the_version(tmp_path):
     [("1.24.0", False), ("1.27.0", False), ("2.0.0", False), ("1.23.1", True), ("0.9", True)],
 )
 def test_version_check(version, refused):
-    from rsvo_env.registration import check_pettingzoo
+    from rsvo_env.envs.registration import check_pettingzoo
 
     if refused:
         with pytest.raises(ImportError, match=f"found pettingzoo {version}"):

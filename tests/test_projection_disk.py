@@ -1,4 +1,5 @@
-"""Culling by the nominal (``rsvo_env.projection_disk``, docs/math.md "Culling by the nominal"):
+"""Culling by the nominal (``rsvo_env.filter.projection_disk``, docs/math.md "Culling by the
+nominal"):
 the single-integrator solution lies in the disk with diameter [0, nominal] while no row has
 b < 0, so the rows that cannot bind there, and the pairs beyond the radius of min(|nominal|,
 |U|), are dropped; the actions stay those of every row of every pair, in any units, with
@@ -10,12 +11,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env import barriers, grid, pairs, projection_disk
-from rsvo_env.neighbors import DENSE_MAX_AGENTS
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.dynamics import barriers
+from rsvo_env.filter import dense as dense_solver
+from rsvo_env.filter import projection_disk
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.geometry import pairs
+from rsvo_env.qp import exact
 from rsvo_env.scenarios import Crowd
-from rsvo_env.solvers import dense as dense_solver
-from rsvo_env.solvers import exact
+from rsvo_env.util import grid
+from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
 
 
 def every_row(flt, x, nominal, theta, cull=False):

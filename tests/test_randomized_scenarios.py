@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import rsvo_env
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs.vector import BatchedEnv
 
 
 def test_theta_range_draws_each_episode_in_range_and_repeats_under_a_seed():

@@ -6,9 +6,9 @@ import pytest
 
 import rsvo_env
 import wrappers
-from rsvo_env.residual import Residual
-from rsvo_env.safety import FilterConfig
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.control.residual import Residual
+from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.filter.safety import FilterConfig
 
 BAD_SEEDS = [1.5, "3", np.float64(2.0), 2.0, -1, True, np.bool_(False), 1j]
 

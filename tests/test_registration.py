@@ -14,7 +14,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import rsvo_env  # noqa: F401  (registers the ids)
 import wrappers
-from rsvo_env.registration import IDS
+from rsvo_env.envs.registration import IDS
 
 
 @pytest.mark.parametrize("env_id", list(IDS))

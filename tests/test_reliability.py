@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import rsvo_env
-from rsvo_env.safety import FilterConfig, SafetyFilter
-from rsvo_env.solvers import exact, reference
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.qp import exact, reference
 
 
 def test_1_a_single_corner_polygon_is_feasible():

@@ -4,8 +4,8 @@ Findings 1 and 2 (rounding at the backup barrier's edge) are in test_backup_barr
 import numpy as np
 import pytest
 
-from rsvo_env.stall import DEADLOCK_SECONDS, deadlock_steps
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.control.stall import DEADLOCK_SECONDS, deadlock_steps
+from rsvo_env.envs.vector import BatchedEnv
 
 
 @pytest.mark.parametrize("dt", [0.3, 0.01, 0.05, 0.1, 0.7, 1e-3, 3.0, 20.0])
@@ -171,7 +171,7 @@ def test_10_unwritable_outputs_are_found_before_any_work(tmp_path, capsys, monke
     """Permission bits do not tell root (nor a virtual file system): /proc passed the check, the
     whole job ran, then a FileNotFoundError traceback; a missing folder was made silently."""
     from rsvo_env.cli import main as rsvo
-    from rsvo_env.env import RSVOParallelEnv
+    from rsvo_env.envs.parallel import RSVOParallelEnv
 
     ran = []
     monkeypatch.setattr(RSVOParallelEnv, "step", lambda *a: ran.append(1))
@@ -238,7 +238,7 @@ def test_6_a_steps_memory_is_the_documented_bound_of_agents_and_pairs(spread, n)
     import tracemalloc
     from pathlib import Path
 
-    from rsvo_env.safety import FilterConfig, SafetyFilter
+    from rsvo_env.filter.safety import FilterConfig, SafetyFilter
     from rsvo_env.scenarios import Crowd
 
     api = " ".join((Path(__file__).parents[1] / "docs" / "api.md").read_text().split())
@@ -266,7 +266,7 @@ def test_13_scores_that_overflow_their_sum_warn_nothing():
     add'; every other stray warning of the project's code now fails its test (conftest)."""
     import warnings
 
-    from rsvo_env.responsibility import r_svo, weight_matrix
+    from rsvo_env.responsibility.svo import r_svo, weight_matrix
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")

@@ -24,7 +24,7 @@ def test_rgb_array_frames_have_the_documented_shape_and_move():
 
 
 def test_colours_follow_theta():
-    from rsvo_env.rendering import theta_colors
+    from rsvo_env.envs.rendering import theta_colors
 
     c = theta_colors(np.array([0.0, 1.0, 100.0]))
     assert c[0, 0] > c[2, 0] and c[0, 2] < c[2, 2]  # egoist red, altruist blue
@@ -78,9 +78,9 @@ def test_trajectory_figures_draw_their_obstacles_and_keep_the_legend_off_the_lab
     its colour bar spanned 0-2 when every theta is 1."""
     import matplotlib.pyplot as plt
 
+    from rsvo_env.cli.episode import run
     from rsvo_env.cli.figures import episode
-    from rsvo_env.cli.simulate import run
-    from rsvo_env.rendering import OBSTACLE_GREY
+    from rsvo_env.envs.rendering import OBSTACLE_GREY
 
     for scenario, kwargs in (("doorway", {}), ("obstacle_field", {"max_steps": 60})):
         out = run(scenario, **kwargs)

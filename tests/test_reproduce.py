@@ -122,7 +122,7 @@ def test_figures_explain_themselves(runs):
     import matplotlib.pyplot as plt
 
     from rsvo_env.cli.figures import event_marks
-    from rsvo_env.rendering import plot_trajectories
+    from rsvo_env.envs.rendering import plot_trajectories
 
     out = runs[2]["circular"]["runs"]["asym"]
     marks, labels = event_marks(out)

@@ -6,8 +6,8 @@ import pytest
 
 import rsvo_env
 import wrappers
-from rsvo_env.residual import Residual
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.control.residual import Residual
+from rsvo_env.envs.vector import BatchedEnv
 
 
 @pytest.mark.parametrize("nominal", ["move_to_goal", "rorca"])

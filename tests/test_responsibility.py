@@ -3,7 +3,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env.responsibility import r_svo, responsibility_weight, weight_matrix
+from rsvo_env.responsibility.svo import r_svo, responsibility_weight, weight_matrix
 
 scores = st.floats(min_value=0.0, max_value=1e6, allow_nan=False, allow_infinity=False)
 
@@ -129,7 +129,7 @@ def test_equal_scores_give_one_half_at_any_magnitude(t):
 def test_pair_weights_from_scores_are_the_weight_matrix_entries(seed, n, scale, zeros):
     """The compiled pair weights (``pairs.scored_pairs``, the filter's large-N path) are the
     weight matrix's entries bit for bit, in every env's weighting, at any scale of scores."""
-    from rsvo_env import pairs
+    from rsvo_env.geometry import pairs
 
     rng = np.random.default_rng(seed)
     theta = rng.uniform(0.0, 1.0, (3, n)) * 10.0**scale
@@ -142,7 +142,7 @@ def test_pair_weights_from_scores_are_the_weight_matrix_entries(seed, n, scale, 
     W = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
     np.testing.assert_array_equal(got, pairs.omega_pairs(W.reshape(3 * n, n), I, J, n))
     # and the numbers of Def. 1 as numpy computes them, an independent route
-    from rsvo_env.responsibility import scored_weight
+    from rsvo_env.responsibility.svo import scored_weight
 
     th = theta.reshape(-1)
     w = scored_weight(th[I], th[J], np.array([m == "symmetric" for m in modes])[I // n])
@@ -161,7 +161,7 @@ def test_compiled_weight_matrices_are_the_named_ones(seed, k, n, scale, zeros):
     """The compiled matrices and floors (``named_weights_and_floor``, which resets and
     ``weight_matrix`` use) are Def. 1's numbers as numpy computes them, bit for bit, at any
     scale of scores: ``pair_omega`` above the diagonal, 1 minus its transpose below."""
-    from rsvo_env.responsibility import named_weights, named_weights_and_floor, pair_omega
+    from rsvo_env.responsibility.svo import named_weights, named_weights_and_floor, pair_omega
 
     rng = np.random.default_rng(seed)
     theta = rng.uniform(0.0, 1.0, (k, n)) * 10.0**scale

@@ -1,4 +1,4 @@
-"""R-ORCA, the active scripted controller (``rsvo_env/rorca.py``, ``docs/liveness.md``): its
+"""R-ORCA, the active scripted controller (``rsvo_env/control/rorca.py``, ``docs/liveness.md``): its
 half-planes are ORCA's with the R-SVO shares (reciprocal: any pair of velocities in both leaves
 no collision within the horizon), the egoist does less of the avoidance, and behind the
 unchanged filter crowds finish with no collision."""
@@ -9,9 +9,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import rsvo_env
-from rsvo_env import rorca
+from rsvo_env.control import rorca
+from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.scenarios import paired_theta
-from rsvo_env.vector import BatchedEnv
 
 coords = st.floats(-10, 10)
 

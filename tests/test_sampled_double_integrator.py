@@ -11,7 +11,7 @@ from instances import converging_pair
 import rsvo_env
 import wrappers
 from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
 A_MAX, DS = 5.0, 5.0
 

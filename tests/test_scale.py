@@ -6,14 +6,15 @@ import numpy as np
 import pytest
 
 import rsvo_env
-from rsvo_env import barriers, pairs, responsibility
-from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.neighbors import nearest_distance
-from rsvo_env.nominal import move_to_goal
-from rsvo_env.rendering import TRAIL
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.control.nominal import move_to_goal
+from rsvo_env.dynamics import barriers, double_integrator_step
+from rsvo_env.envs.rendering import TRAIL
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.geometry import pairs
+from rsvo_env.qp import exact
+from rsvo_env.responsibility import svo as responsibility
 from rsvo_env.scenarios import Crowd
-from rsvo_env.solvers import exact
+from rsvo_env.util.neighbors import nearest_distance
 
 
 def test_history_is_bounded_unless_kept():
@@ -116,7 +117,7 @@ def test_double_integrator_crowd_flags_every_infeasible_step():
 
 
 def run_batch(steps, setup):
-    from rsvo_env.vector import BatchedEnv
+    from rsvo_env.envs.vector import BatchedEnv
 
     venv = BatchedEnv("crowd", num_envs=2, num_agents=90, theta_range=(1.0, 10.0), max_steps=30)
     venv.reset(seed=3)
@@ -136,8 +137,8 @@ def halves(theta):
 def test_weights_from_scores_are_the_matrix(monkeypatch, env1_mode):
     """Beyond DENSE_MAX agents the core keeps no weight matrix: observations, safe actions and
     rewards are those of the matrix, through auto-resets, and world.omega is still the matrix."""
-    from rsvo_env import weights
-    from rsvo_env.state import World
+    from rsvo_env.envs.world import World
+    from rsvo_env.sim import weights
 
     callable_mode = halves if env1_mode == "callable" else None
     mode = callable_mode or env1_mode

@@ -113,7 +113,7 @@ def test_bodies_and_obstacles_are_drawn_true_size():
 
 
 def test_filters_that_cannot_take_the_scene_are_refused():
-    from rsvo_env.safety import FilterConfig, SafetyFilter
+    from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
     env = rsvo_env.parallel_env("doorway")
     with pytest.raises(ValueError, match="filter dynamics 'double_integrator'"):

@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from rational_qp import exact_qp
 
-from rsvo_env.solvers import exact, reference
+from rsvo_env.qp import exact, reference
 
 FAMILIES = ("nearly_parallel", "duplicate", "corner_only", "fan", "scaled", "random")
 PER_EXAMPLE = 50  # instances per hypothesis example

@@ -9,8 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from instances import KINDS, make_batch, make_instance, stack
 
-from rsvo_env import threads
-from rsvo_env.solvers import exact, reference
+from rsvo_env.qp import exact, reference
+from rsvo_env.util import threads
 
 
 def _compare(solver: str, K: int, count: int, seed: int, tol: float) -> dict:

@@ -10,9 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import rsvo_env
-from rsvo_env import observation
-from rsvo_env.stall import PROGRESS, StallClock
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.control.stall import PROGRESS, StallClock
+from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.sim import observation
 
 
 def reference_steps(distances: np.ndarray, at_goal: np.ndarray, radius: float) -> np.ndarray:

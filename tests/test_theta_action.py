@@ -1,4 +1,5 @@
-"""Theta as an action (rsvo_env.theta_action): the map, the spaces, the refusals, determinism
+"""Theta as an action (rsvo_env.control.theta_action): the map, the spaces, the refusals,
+determinism
 against single envs, and safety under random and adversarial personalities changed every step."""
 
 import numpy as np
@@ -9,8 +10,8 @@ from hypothesis import strategies as st
 
 import rsvo_env
 import wrappers
-from rsvo_env.theta_action import DEFAULT_RANGE, ThetaAction
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.control.theta_action import DEFAULT_RANGE, ThetaAction
+from rsvo_env.envs.vector import BatchedEnv
 from tests.test_batched import check_batch_equals_singles
 
 CROWD = {"dt": 0.1, "gamma": 10.0}  # gamma dt = 1: the largest step the guarantee allows

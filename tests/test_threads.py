@@ -1,4 +1,5 @@
-"""The thread policy (``rsvo_env/threads.py``, ``docs/threads.md``): one thread unless a process
+"""The thread policy (``rsvo_env/util/threads.py``, ``docs/threads.md``): one thread unless a
+process
 opts in, parallel kernels only over enough work, the same results either way, and bad counts
 refused by name."""
 
@@ -11,8 +12,8 @@ import numba
 import numpy as np
 import pytest
 
-from rsvo_env import threads
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.util import threads
 
 ROOT = Path(__file__).resolve().parents[1]
 POOL = numba.config.NUMBA_NUM_THREADS
@@ -48,7 +49,7 @@ def run(code: str, value: str) -> subprocess.CompletedProcess:
 
 
 def test_the_environment_variable_opts_a_process_in():
-    code = "import rsvo_env.threads as t; print(t.get_num_threads(), t.parallel(10**4))"
+    code = "import rsvo_env.util.threads as t; print(t.get_num_threads(), t.parallel(10**4))"
     assert run(code, "2").stdout.split() == ["2", "True"]
     bad = run(code, "abc")
     assert bad.returncode != 0 and "RSVO_NUM_THREADS" in bad.stderr and "'abc'" in bad.stderr
@@ -115,7 +116,8 @@ def test_a_step_leaves_the_callers_numba_thread_count_as_it_was():
 @pytest.mark.parametrize(("n", "e"), [(6, 1), (4, 64), (50, 3)])
 def test_the_serial_and_prange_forms_agree_bit_for_bit(n, e):
     """The dense filter pass and the CSR solve, each form on the same crowd state."""
-    from rsvo_env.solvers import dense, exact
+    from rsvo_env.filter import dense
+    from rsvo_env.qp import exact
 
     env = BatchedEnv("crowd", num_envs=e, num_agents=n, safety_filter=True, nominal="move_to_goal")
     env.reset(seed=2)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
-from rsvo_env import observation
+from rsvo_env.sim import observation
 from training import config as configs
 from training import evaluate, train
 from training.evaluation import record_gif, run_episodes, scripted_policy
@@ -47,7 +47,7 @@ def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys
     import numba
     import torch
 
-    from rsvo_env import threads as kernels
+    from rsvo_env.util import threads as kernels
 
     assert saved["threads"] == 1 == torch.get_num_threads() == numba.get_num_threads()
     assert kernels.get_num_threads() == 1

@@ -5,11 +5,11 @@ motion under the look-ahead hold, and obstacles hold as for the single integrato
 import numpy as np
 import pytest
 
-from rsvo_env import pairs
 from rsvo_env.dynamics import unicycle_step
 from rsvo_env.dynamics.unicycle import heading_vectors
-from rsvo_env.obstacles import Obstacles
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.geometry import pairs
+from rsvo_env.geometry.obstacles import Obstacles
 
 V_MAX, W_MAX = 1.0, 2.0
 

@@ -88,7 +88,7 @@ def test_unknown_reset_options_warn_once_and_name_the_known_ones():
 
 
 def test_registered_specs_carry_the_step_limit():
-    for env_id, scenario in rsvo_env.registration.IDS.items():
+    for env_id, scenario in rsvo_env.envs.registration.IDS.items():
         spec = gymnasium.spec(env_id)
         assert spec.max_episode_steps == rsvo_env.SCENARIOS[scenario].defaults["max_steps"]
     # gymnasium.make applies a TimeLimit at the registered limit; a longer episode asks for both
@@ -121,7 +121,7 @@ def test_the_project_points_nowhere_outside_itself():
 def test_reference_solvers_are_quiet(capfd):
     import warnings
 
-    from rsvo_env.safety import FilterConfig, SafetyFilter
+    from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
     x = [[0.0, 0.0], [1.5, 0.0], [0.0, 1.5]]
     with warnings.catch_warnings(record=True) as caught:

@@ -174,7 +174,7 @@ def test_theta_search_runs_tune_with_optuna_and_never_loses_to_its_starts(tmp_pa
     for row in report["rows"]:
         assert all(low <= t <= high for t in row["theta"]) and row["collision_steps"] == 0
     # a row's objective is the batched evaluation of its theta
-    from rsvo_env.vector import BatchedEnv
+    from rsvo_env.envs.vector import BatchedEnv
     from training.personalities import PAPER_GAME, evaluate
 
     row = report["rows"][-1]

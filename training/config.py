@@ -14,7 +14,7 @@ from typing import Any
 import yaml
 
 from rsvo_env.cli.scene_file import load_yaml
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs.vector import BatchedEnv
 from training import schema
 
 CONFIG_DIR = Path(__file__).parent / "configs"
@@ -195,7 +195,7 @@ def limit_threads(threads: int) -> None:
     import numba
     import torch
 
-    from rsvo_env import threads as kernels
+    from rsvo_env.util import threads as kernels
 
     # numba first: starting its threading layer can reset the OpenMP thread count torch reads
     n = min(threads, numba.config.NUMBA_NUM_THREADS)

@@ -23,8 +23,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from rsvo_env.cli.arguments import count, output_problem
-from rsvo_env.cli.main import Parser
+from rsvo_env.cli.arguments import Parser, count, output_problem
 from training import config as configs
 from training.config import make_env
 from training.evaluation import (

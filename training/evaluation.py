@@ -177,7 +177,7 @@ def record_gif(
     """One seeded episode of the filtered ParallelEnv, driven by ``policy``, as a GIF played at
     ``fps`` frames a second (one frame a step: real time when ``fps = 1 / dt``), capped as the
     evaluation's episodes are (:func:`evaluation_cap`)."""
-    from rsvo_env.rendering import save_gif
+    from rsvo_env.envs.rendering import save_gif
 
     cfg = {**cfg, "env": {**cfg["env"], "max_steps": evaluation_cap(cfg)}}
     env = make_parallel(cfg, render_mode="rgb_array", action=action)

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs.vector import BatchedEnv
 
 # the paper's circular game (Sec. V-C): its scripted controller, not the scenario's R-ORCA
 PAPER_GAME = {"nominal": "move_to_goal"}

@@ -49,7 +49,7 @@ class RSVOMultiAgentEnv(MultiAgentEnv):
         return obs, rewards, terms, truncs, infos
 
     def state(self) -> Any:
-        """The global state of the running episode (``rsvo_env.global_state``)."""
+        """The global state of the running episode (``rsvo_env.envs.global_state``)."""
         return self.par_env.state()
 
     def close(self) -> None:

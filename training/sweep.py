@@ -21,8 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from rsvo_env.cli.arguments import count
-from rsvo_env.cli.main import Parser
+from rsvo_env.cli.arguments import Parser, count
 from training import config as configs
 from training import tune_runs
 

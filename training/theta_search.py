@@ -24,10 +24,9 @@ from typing import Any
 
 import numpy as np
 
-from rsvo_env.cli.arguments import count
-from rsvo_env.cli.main import Parser
-from rsvo_env.validation import check_positive
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.cli.arguments import Parser, count
+from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.util.validation import check_positive
 from training import config as configs
 from training import tune_runs
 from training.personalities import FIELDS as STATS

@@ -19,8 +19,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from rsvo_env.cli.arguments import count, output_problem
-from rsvo_env.cli.main import Parser
+from rsvo_env.cli.arguments import Parser, count, output_problem
 from training import config as configs
 
 # flags of the RLlib engine alone: given with another engine they would be ignored

@@ -1,4 +1,4 @@
-"""The registries' entry points (``rsvo_env.registration``): an id names its scenario, so a
+"""The registries' entry points (``rsvo_env.envs.registration``): an id names its scenario, so a
 ``scenario=`` keyword that names another is refused rather than silently swapping the scene."""
 
 from __future__ import annotations

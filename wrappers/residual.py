@@ -19,7 +19,7 @@ from typing import Any
 
 from pettingzoo.utils import BaseParallelWrapper
 
-from rsvo_env.residual import Residual
+from rsvo_env.control.residual import Residual
 
 
 class ResidualAction(BaseParallelWrapper):
@@ -31,7 +31,7 @@ class ResidualAction(BaseParallelWrapper):
     ``interaction_radius``: with it, the residual of an agent en route acts only while another
     agent is closer than this; ``stall_gate``: with it, the residual of an agent that has come no
     closer to its goal for this many seconds is ignored until it does again
-    (:class:`rsvo_env.residual.Residual`)."""
+    (:class:`rsvo_env.control.residual.Residual`)."""
 
     def __init__(
         self,

@@ -16,9 +16,9 @@ from typing import Any
 from pettingzoo.utils import BaseParallelWrapper
 
 import rsvo_env
-from rsvo_env.factory import filter_config, route
-from rsvo_env.safety import SafetyFilter
-from rsvo_env.validation import check_flag
+from rsvo_env.envs.factory import filter_config, route
+from rsvo_env.filter.safety import SafetyFilter
+from rsvo_env.util.validation import check_flag
 
 
 class RCBFSafetyFilter(BaseParallelWrapper):
@@ -56,7 +56,7 @@ def filtered_parallel_env(
     """The registry's ParallelEnv: the scenario behind the filter (``safety_filter=False``: the
     bare env). The filter's keywords (``gamma``, ``solver``, ``barrier``, ``split``,
     ``neighbor_radius``, ``intervention_penalty``) go to the filter, the rest to the env, by
-    the same table as ``BatchedEnv``'s (``rsvo_env.factory.route``)."""
+    the same table as ``BatchedEnv``'s (``rsvo_env.envs.factory.route``)."""
     safety_filter = check_flag(safety_filter, "safety_filter")
     filter_kwargs = route(safety_filter, kwargs)
     env = rsvo_env.parallel_env(scenario, **kwargs)
@@ -65,6 +65,6 @@ def filtered_parallel_env(
 
 def filtered_aec_env(**kwargs: Any):
     """The AEC version of :func:`filtered_parallel_env` (actions checked when submitted)."""
-    from rsvo_env.env import aec_from_parallel
+    from rsvo_env.envs.parallel import aec_from_parallel
 
     return aec_from_parallel(filtered_parallel_env(**kwargs))

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
-from rsvo_env.vector import BatchedEnv
+from rsvo_env.envs.vector import BatchedEnv
 from wrappers.parallel_batch import ParallelBatch
 
 # Per-slot signals copied into every info (the filter's work and the collision cost).

@@ -12,7 +12,7 @@ from typing import Any
 
 from pettingzoo.utils import BaseParallelWrapper
 
-from rsvo_env.responsibility import Weighting
+from rsvo_env.responsibility.svo import Weighting
 
 
 class ResponsibilityWeighting(BaseParallelWrapper):

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rsvo_env.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
 
 def head_on_swap(
@@ -41,7 +41,7 @@ def head_on_swap(
 
 
 def main(argv: list[str] | None = None) -> int:
-    from rsvo_env.cli.main import Parser
+    from rsvo_env.cli.arguments import Parser
 
     Parser(prog="rsvo demo", description=__doc__).parse_args(argv)
     out = head_on_swap()

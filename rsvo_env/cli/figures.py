@@ -10,7 +10,7 @@ import numpy as np
 from rsvo_env.cli.studies import defaults
 from rsvo_env.cli.studies.position_swap import RADII, WEIGHTS
 from rsvo_env.cli.studies.ramp_merge import CASES
-from rsvo_env.rendering import marker_handles, plot_trajectories, role
+from rsvo_env.envs.rendering import marker_handles, plot_trajectories, role
 
 
 def position_swap(runs: dict, path: Path) -> None:
@@ -18,7 +18,7 @@ def position_swap(runs: dict, path: Path) -> None:
     import matplotlib.pyplot as plt
     from matplotlib.colors import LinearSegmentedColormap, Normalize
 
-    from rsvo_env.rendering import ALTRUIST, EGOIST
+    from rsvo_env.envs.rendering import ALTRUIST, EGOIST
 
     fig, axes = plt.subplots(2, 3, figsize=(13, 9), layout="constrained")
     for (R, w1), out in runs.items():

@@ -9,10 +9,8 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
-from pathlib import Path
-from typing import NoReturn
+
+from rsvo_env.cli.arguments import Parser, UserError
 
 COMMANDS = {
     "demo": "filter a two-agent head-on swap on plain arrays and print the distance kept",
@@ -20,39 +18,6 @@ COMMANDS = {
     "and a trajectory figure",
     "reproduce": "the paper's experiments: tables (paper.md), figures and GIFs",
 }
-
-
-class UserError(ValueError):
-    """A mistake of the user's (a bad argument, a value the library refuses, a path that cannot
-    be written), reported as one line and exit status 2. Only these are: any other exception
-    is a bug and keeps its traceback."""
-
-
-class Parser(argparse.ArgumentParser):
-    """argparse, with its errors as one line (no usage block) and exit status 2."""
-
-    def error(self, message: str) -> NoReturn:
-        print(f"{self.prog}: error: {message}", file=sys.stderr)
-        sys.exit(2)
-
-
-@contextmanager
-def user_input() -> Iterator[None]:
-    """Around the step that hands the user's values to the library: its refusals (ValueError,
-    TypeError naming the field and the value) are the user's mistakes."""
-    try:
-        yield
-    except (ValueError, TypeError) as exc:
-        raise UserError(str(exc)) from None
-
-
-def check_output(path: Path | None, suffix: str | None = None, directory: bool = False) -> None:
-    """Refuse, before any work, an output path that cannot be written."""
-    from rsvo_env.cli.arguments import output_problem
-
-    problem = None if path is None else output_problem(path, suffix, directory)
-    if problem:
-        raise UserError(problem)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -15,66 +15,15 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 import rsvo_env
-from rsvo_env.cli.arguments import count
-from rsvo_env.cli.main import Parser, UserError, check_output, user_input
+from rsvo_env.cli.arguments import Parser, UserError, check_output, count, user_input
+from rsvo_env.cli.episode import run
 from rsvo_env.cli.scene_file import read_scene
-from rsvo_env.rendering import save_gif
-from rsvo_env.scenario import NOMINALS
+from rsvo_env.scenarios.base import NOMINALS
 
 
 class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
     """Keeps the description's lines and shows every default."""
-
-
-def run(
-    scenario: str = "circular_swap",
-    safety_filter: bool = True,
-    weighting: str = "asymmetric",
-    theta: list[float] | None = None,
-    seed: int = 0,
-    gif: str | Path | None = None,
-    gif_every: int = 5,
-    render_size: int = 400,
-    **kwargs: Any,
-) -> dict[str, Any]:
-    """One episode under the scripted nominal controller; returns the episode metrics plus the
-    trajectory (T+1, N, 2), theta and goals."""
-    from wrappers import RCBFSafetyFilter  # the cli is the top floor: it may use wrappers
-
-    with user_input():  # what the library refuses here is the caller's value
-        env = rsvo_env.parallel_env(
-            scenario,
-            render_mode="rgb_array" if gif else None,
-            weighting=weighting,
-            render_size=render_size,
-            keep_history=True,
-            record_series=True,
-            **kwargs,
-        )
-        if safety_filter:
-            env = RCBFSafetyFilter(env)
-        options = {"theta": theta} if theta is not None else None
-        env.reset(seed=seed, options=options)
-    base = env.unwrapped
-    frames = [env.render()] if gif else []
-    while env.agents:
-        env.step(base.nominal_actions())
-        if gif and (base.metrics.steps % gif_every == 0 or not env.agents):
-            frames.append(env.render())
-    out = dict(base.episode_metrics)
-    out["trajectory"] = np.stack(base.history)
-    out["theta"] = base.world.theta.copy()
-    out["goals"] = base.world.goals.copy()
-    out["obstacles"] = base.world.obstacles.copy()
-    out["safety_radius"] = base.world.safety_radius
-    if gif:
-        fps = max(1, int(round(1.0 / (base.dt * gif_every))))
-        out["gif"] = save_gif(frames, gif, fps=min(fps, 50))
-    env.close()
-    return out
 
 
 def main(argv: list[str] | None = None) -> int:

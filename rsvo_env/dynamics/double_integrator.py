@@ -11,8 +11,8 @@ from numpy.typing import NDArray
 from rsvo_env.dynamics.model import Dynamics
 
 if TYPE_CHECKING:
-    from rsvo_env.filter_config import FilterConfig
-    from rsvo_env.rows import Rows
+    from rsvo_env.qp.rows import Rows
+    from rsvo_env.util.settings import FilterSettings
 
 
 def double_integrator_step(
@@ -26,7 +26,7 @@ def check_sampled_pairs(dt: float, bodies: Any, I: NDArray, J: NDArray) -> None:
     """The sampled-data bound of the braking barrier for each pair of bodies of their own:
     ``dt^2 (A / 2 + U) < r_i + r_j`` (``A = a_i + a_j``, ``U = (U_i + U_j) / 2``), the pair's
     version of the config's ``dt^2 (a_max + |u_max|) < safety_radius``; an error names the pair."""
-    from rsvo_env.barriers import braking_capability
+    from rsvo_env.dynamics.barriers import braking_capability
 
     a = braking_capability(bodies.lo, bodies.hi)
     reach = 0.5 * (a[I] + a[J] + bodies.speed[I] + bodies.speed[J])
@@ -42,7 +42,8 @@ def check_sampled_pairs(dt: float, bodies: Any, I: NDArray, J: NDArray) -> None:
 
 
 class DoubleIntegrator(Dynamics):
-    """The backup barrier's rows (``rsvo_env.backup_barrier``, the default: every QP feasible
+    """The backup barrier's rows (``rsvo_env.dynamics.backup_barrier``, the default: every QP
+    feasible
     while every h >= 0, walls included), or the braking or HOCBF barrier's, split by
     responsibility (``FilterConfig.barrier``, ``split``)."""
 
@@ -58,7 +59,7 @@ class DoubleIntegrator(Dynamics):
         # the braking barrier's proof covers circles only; the backup barrier's any capsule
         return barrier == "backup"
 
-    def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
+    def check_box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> None:
         if cfg.barrier == "hocbf":
             return
         if not ((lo < 0).all() and (hi > 0).all()):
@@ -68,7 +69,7 @@ class DoubleIntegrator(Dynamics):
             )
         if cfg.barrier == "backup":  # exact in sampled time at any dt
             return
-        from rsvo_env.barriers import braking_capability, largest_input
+        from rsvo_env.dynamics.barriers import braking_capability, largest_input
 
         reach = float(braking_capability(lo, hi) + largest_input(lo, hi))
         if cfg.dt is not None and cfg.dt**2 * reach >= cfg.safety_radius:
@@ -85,7 +86,7 @@ class DoubleIntegrator(Dynamics):
             return super().filter_rows(
                 cfg, positions, velocities, weights, I, J, bodies, capsules, n
             )
-        from rsvo_env.backup_barrier import backup_rows
+        from rsvo_env.dynamics.backup_barrier import backup_rows
 
         return backup_rows(
             positions, velocities, weights, I, J, cfg.gamma, cfg.dt, bodies.radii, bodies.lo,
@@ -93,7 +94,7 @@ class DoubleIntegrator(Dynamics):
         )  # fmt: skip
 
     def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:
-        from rsvo_env import barriers
+        from rsvo_env.dynamics import barriers
 
         if cfg.barrier == "backup":
             raise ValueError(
@@ -112,7 +113,7 @@ class DoubleIntegrator(Dynamics):
         )  # fmt: skip
 
     def obstacle_rows(self, cfg, positions, velocities, bodies, capsules, n):
-        from rsvo_env.double_integrator_obstacles import double_integrator_obstacle_rows
+        from rsvo_env.dynamics.double_integrator_obstacles import double_integrator_obstacle_rows
 
         walls = np.any(capsules[..., 0:2] != capsules[..., 2:4], axis=-1)
         if walls.any():
@@ -122,7 +123,7 @@ class DoubleIntegrator(Dynamics):
                 f"{int(np.nonzero(walls)[-1][0])} is a segment"
             )
         if cfg.dt is not None and cfg.barrier == "braking":
-            from rsvo_env.barriers import braking_capability
+            from rsvo_env.dynamics.barriers import braking_capability
 
             # the worst agent (fastest box, smallest body) against the smallest circle
             reach = float((braking_capability(bodies.lo, bodies.hi) + bodies.speed).max())
@@ -135,10 +136,10 @@ class DoubleIntegrator(Dynamics):
         return double_integrator_obstacle_rows(cfg, positions, velocities, bodies, capsules, n)
 
     def culling_radii(self, cfg, omega_floor, velocities, bodies):
-        from rsvo_env import pairs
+        from rsvo_env.geometry import pairs
 
         if cfg.barrier == "backup":
-            from rsvo_env.backup_barrier import backup_radii
+            from rsvo_env.dynamics.backup_barrier import backup_radii
 
             E, n = velocities.shape[:2]
             return backup_radii(
@@ -153,7 +154,7 @@ class DoubleIntegrator(Dynamics):
             )  # fmt: skip
         # bodies and boxes of their own: the radius of the worst pair bounds every pair's
         # (it grows with Ds and U and shrinks with A, docs/double_integrator.md)
-        from rsvo_env.barriers import braking_capability
+        from rsvo_env.dynamics.barriers import braking_capability
 
         a = braking_capability(bodies.lo, bodies.hi)
         return pairs.double_integrator_radii(

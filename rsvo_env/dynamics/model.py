@@ -16,9 +16,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 if TYPE_CHECKING:
-    from rsvo_env.bodies import Bodies
-    from rsvo_env.filter_config import FilterConfig
-    from rsvo_env.rows import Rows
+    from rsvo_env.geometry.bodies import Bodies
+    from rsvo_env.qp.rows import Rows
+    from rsvo_env.util.settings import FilterSettings
 
 
 class Dynamics:
@@ -29,15 +29,16 @@ class Dynamics:
     limit_name: ClassVar[str] = "u_max"
     # whether the filter's rows need the agents' velocities
     needs_velocities: ClassVar[bool] = False
-    # whether the compiled dense filter (rsvo_env.solvers.dense) computes this model's rows
+    # whether the compiled dense filter (rsvo_env.filter.dense) computes this model's rows
     dense_kernel: ClassVar[bool] = False
     # whether its QP projects the nominal onto a set that holds u = 0 while no row has b < 0,
-    # so that the solution lies in the disk with diameter [0, nominal] (rsvo_env.projection_disk)
+    # so that the solution lies in the disk with diameter [0, nominal]
+    # (rsvo_env.filter.projection_disk)
     nominal_disk: ClassVar[bool] = False
     # whether one radius from the smallest weight alone bounds every binding pair
     # (:meth:`search_radius`); else the state decides it (:meth:`culling_radii`)
     radius_from_weights: ClassVar[bool] = False
-    # whether its agents may each have their own body radius (rsvo_env.bodies), and box
+    # whether its agents may each have their own body radius (rsvo_env.geometry.bodies), and box
     per_agent_bodies: ClassVar[bool] = False
     per_agent_limits: ClassVar[bool] = True
     # whether its input is its velocity (a scripted controller may steer it as such: R-ORCA)
@@ -56,15 +57,15 @@ class Dynamics:
         circles."""
         return True
 
-    def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
+    def check_box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> None:
         """Refuse an input box under which this model's guarantee does not hold."""
 
-    def box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> tuple[NDArray, NDArray]:
+    def box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> tuple[NDArray, NDArray]:
         """The box of the filter's QP from the configured bounds (the same, unless the model
         solves in coordinates of its own)."""
         return lo, hi
 
-    def agent_boxes(self, cfg: FilterConfig, u_max: NDArray) -> tuple[NDArray, NDArray]:
+    def agent_boxes(self, cfg: FilterSettings, u_max: NDArray) -> tuple[NDArray, NDArray]:
         """Each agent's input box (M, 2) from its own bound ``u_max`` (M,), checked > 0:
         ``[-u_max_i, u_max_i]`` per component (a model with another input box overrides it)."""
         hi = np.repeat(np.asarray(u_max, dtype=np.float64).reshape(-1, 1), 2, axis=1)
@@ -72,7 +73,7 @@ class Dynamics:
 
     def lift(
         self,
-        cfg: FilterConfig,
+        cfg: FilterSettings,
         positions: NDArray,
         headings: NDArray,
         nominal: NDArray,
@@ -105,13 +106,13 @@ class Dynamics:
         """The inverse of :meth:`controls`."""
         raise NotImplementedError
 
-    def lower(self, cfg: FilterConfig, actions: NDArray, bodies: Bodies) -> NDArray:
+    def lower(self, cfg: FilterSettings, actions: NDArray, bodies: Bodies) -> NDArray:
         """The QP's solution back in the model's inputs (inverse of :meth:`lift`'s nominal)."""
         return actions
 
     def rows(
         self,
-        cfg: FilterConfig,
+        cfg: FilterSettings,
         positions: NDArray,
         velocities: NDArray | None,
         weights: NDArray,
@@ -124,20 +125,20 @@ class Dynamics:
 
     def obstacle_rows(
         self,
-        cfg: FilterConfig,
+        cfg: FilterSettings,
         positions: NDArray,
         velocities: NDArray | None,
         bodies: Bodies,
         capsules: NDArray,
         n: int,
     ) -> tuple[NDArray, ...]:
-        """Every agent's rows against the static obstacles (``rsvo_env.obstacles``), weight 1:
-        offsets, A, b, h, obstacle of each row, and each agent's smallest h over them."""
+        """Every agent's rows against the static obstacles (``rsvo_env.geometry.obstacles``),
+        weight 1: offsets, A, b, h, obstacle of each row, and each agent's smallest h over them."""
         raise ValueError(f"obstacles are not available for the {self.name} yet")
 
     def filter_rows(
         self,
-        cfg: FilterConfig,
+        cfg: FilterSettings,
         positions: NDArray,
         velocities: NDArray | None,
         weights: NDArray,
@@ -150,7 +151,7 @@ class Dynamics:
         """What the filter solves: every agent's rows (pairs, then obstacles, ``capsules``
         (E, O, 5) or (1, O, 5) or None) and each agent's smallest barrier value against the
         obstacles (None without)."""
-        from rsvo_env.rows import with_obstacles
+        from rsvo_env.qp.rows import with_obstacles
 
         rows = self.rows(cfg, positions, velocities, weights, I, J, bodies)
         if capsules is None:
@@ -161,13 +162,13 @@ class Dynamics:
         return with_obstacles(rows, *obstacle_rows), obstacle_h
 
     def culling_radii(
-        self, cfg: FilterConfig, omega_floor: NDArray, velocities: NDArray | None, bodies: Bodies
+        self, cfg: FilterSettings, omega_floor: NDArray, velocities: NDArray | None, bodies: Bodies
     ) -> NDArray[np.float64]:
         """Per agent and weight floor (E, N, K), the distance beyond which none of its rows
         with a positive weight can bind in the current state."""
         raise NotImplementedError
 
-    def search_radius(self, cfg: FilterConfig, omega_min: float, bodies: Bodies) -> float:
+    def search_radius(self, cfg: FilterSettings, omega_min: float, bodies: Bodies) -> float:
         """The one radius of a pair search from the smallest weight (models with
         ``radius_from_weights``)."""
         raise NotImplementedError

@@ -10,8 +10,8 @@ from numpy.typing import NDArray
 from rsvo_env.dynamics.model import Dynamics
 
 if TYPE_CHECKING:
-    from rsvo_env.filter_config import FilterConfig
-    from rsvo_env.rows import Rows
+    from rsvo_env.qp.rows import Rows
+    from rsvo_env.util.settings import FilterSettings
 
 
 def single_integrator_step(
@@ -36,7 +36,7 @@ class SingleIntegrator(Dynamics):
         # the velocity of a single integrator is the control it integrated
         return single_integrator_step(positions, u, dt), u.copy()
 
-    def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
+    def check_box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> None:
         if not ((lo <= 0).all() and (hi >= 0).all()):
             # u = 0 satisfies every row while h >= 0 only if the box holds 0: without it a pair
             # in the safe set can have no safe action
@@ -46,21 +46,21 @@ class SingleIntegrator(Dynamics):
             )
 
     def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:
-        from rsvo_env import barriers
+        from rsvo_env.dynamics import barriers
 
         return barriers.single_integrator_rows(
             positions, weights, I, J, cfg.gamma, bodies.radii, bodies.lo, bodies.hi
         )
 
     def obstacle_rows(self, cfg, positions, velocities, bodies, capsules, n):
-        from rsvo_env.obstacles import single_integrator_obstacle_rows
+        from rsvo_env.geometry.obstacles import single_integrator_obstacle_rows
 
         return single_integrator_obstacle_rows(
             positions, bodies.radii, capsules, n, float(cfg.gamma), bodies.lo, bodies.hi, True
         )
 
     def culling_radii(self, cfg, omega_floor, velocities, bodies, speed=None):
-        from rsvo_env import pairs
+        from rsvo_env.geometry import pairs
 
         E, n = omega_floor.shape[:2]
         if speed is None:  # the box's: any action may be the solution
@@ -68,7 +68,7 @@ class SingleIntegrator(Dynamics):
         return pairs.agent_radii(omega_floor, cfg.gamma, speed, bodies.reach(E, n))
 
     def search_radius(self, cfg, omega_min, bodies):
-        from rsvo_env import pairs
+        from rsvo_env.geometry import pairs
 
         # the widest box and the largest pair distance of the scene bound every pair's
         c = np.maximum(np.abs(bodies.lo), np.abs(bodies.hi)).max(axis=0)

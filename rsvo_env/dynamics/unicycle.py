@@ -18,12 +18,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.bodies import Bodies
 from rsvo_env.dynamics.model import Dynamics
 from rsvo_env.dynamics.single_integrator import SingleIntegrator
+from rsvo_env.geometry.bodies import Bodies
 
 if TYPE_CHECKING:
-    from rsvo_env.filter_config import FilterConfig
+    from rsvo_env.util.settings import FilterSettings
 
 
 def heading_vectors(headings: NDArray) -> NDArray[np.float64]:
@@ -64,7 +64,7 @@ class Unicycle(Dynamics):
     needs_headings = True
     per_agent_bodies = True
 
-    def check_box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> None:
+    def check_box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> None:
         if cfg.lookahead is None or cfg.w_max is None:
             raise ValueError("FilterConfig: the unicycle needs lookahead (l > 0) and w_max")
         if not (lo[0] <= 0.0 <= hi[0]):
@@ -78,7 +78,7 @@ class Unicycle(Dynamics):
                 f"v_max = {hi[0]!r} (the look-ahead point's speed bounds the forward speed)"
             )
 
-    def box(self, cfg: FilterConfig, lo: NDArray, hi: NDArray) -> tuple[NDArray, NDArray]:
+    def box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> tuple[NDArray, NDArray]:
         # c_b = (v, l w) with v >= 0: the heading turns toward c, so v(t) rises toward |c| and
         # |w(t)| only falls; |c_b| <= v_max and |l w| <= l w_max then keep every input in its
         # bounds for the whole step. Reversing (v < 0) could swing w past w_max on the way.

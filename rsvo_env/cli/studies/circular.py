@@ -10,9 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from rsvo_env.cli.simulate import run
+from rsvo_env.cli.episode import run
 from rsvo_env.cli.studies import ALTERNATING, Plan
-from rsvo_env.metrics import completion_gain, resolution_gain
+from rsvo_env.sim.metrics import completion_gain, resolution_gain
 
 
 def steps_of(out: dict) -> tuple[int | None, int | None, int | None]:

@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from rsvo_env.cli.simulate import run
+from rsvo_env.cli.episode import run
 from rsvo_env.cli.studies import Plan, defaults
-from rsvo_env.responsibility import theta_for_weight
+from rsvo_env.responsibility.svo import theta_for_weight
 
 RADII = (1.0, 2.0)
 WEIGHTS = (0.8, 0.5, 0.2)

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from rsvo_env.cli.simulate import run
+from rsvo_env.cli.episode import run
 from rsvo_env.cli.studies import Plan, defaults
 
 CASES = {

@@ -1,0 +1,2 @@
+"""The environments over the core: the PettingZoo ParallelEnv, ``BatchedEnv``, the factory,
+rendering, registration."""

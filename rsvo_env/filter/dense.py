@@ -1,0 +1,161 @@
+"""The dense single-integrator filter in one compiled pass, for scenes of few agents.
+
+For every agent of every env: its row against every other agent of the env (paper, eq. ``qp``,
+with ``barriers.single_integrator_row``), exact culling (``barriers.support`` over the box,
+``projection_disk.disk_support`` over the disk the solution lies in), and the exact
+solve (``exact.solve_rows``). The same arithmetic, rows in the same order, as the general path
+(pairs, packing, batched solve), without its intermediate arrays: bit-identical results, tested.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+from numpy.typing import NDArray
+
+from rsvo_env.dynamics.barriers import single_integrator_row, support
+from rsvo_env.filter.projection_disk import disk_support
+from rsvo_env.qp.exact import solve_rows
+from rsvo_env.util import threads
+
+# Up to this many agents an env, examining every pair here costs less than the general path's
+# pair search, row packing and batched solve (measured: benchmarks/dense_filter_speed.py). With
+# equal scores, the scenarios' default, the two break even at 256; with scores spread over
+# 1..10 the general path's wider search lets the dense pass win up to about 450.
+MAX_AGENTS = 256
+
+
+@njit(cache=True, inline="always")
+def _one_env(
+    e, x, nom, omega, gamma, radii, lo, hi, rows, in_disk, out, feasible, active, violation,
+    n_rows, moved,
+):  # fmt: skip
+    n = x.shape[1]
+    min_h = np.inf
+    for i in range(n):
+        a = e * n + i  # the bodies' flat index
+        lo0, lo1, hi0, hi1 = lo[a, 0], lo[a, 1], hi[a, 0], hi[a, 1]
+        xi, yi, ri = x[e, i, 0], x[e, i, 1], radii[a]
+        ux, uy = nom[e, i, 0], nom[e, i, 1]
+        s = np.sqrt(ux * ux + uy * uy)
+        # One pass over the neighbours: the rows that can bind in the box (b < support), in
+        # neighbour order, each marked if it can also bind in the disk [0, nominal]; then, if
+        # no row has b < 0 (the agent is not exempt, rsvo_env.filter.projection_disk), only the
+        # marked ones are kept. Measured (the prange form on one thread, 4 x 256 agents): 63 us
+        # a call, against 82 us for a branch-free first pass over copies of the positions and a
+        # second pass.
+        k = 0
+        b_min = 0.0
+        for j in range(n):
+            if j == i:
+                continue
+            R = ri + radii[e * n + j]
+            ax, ay, b, h = single_integrator_row(
+                xi, yi, x[e, j, 0], x[e, j, 1], omega[e, i, j], gamma, R * R
+            )
+            min_h = min(min_h, h)
+            b_min = min(b_min, b)
+            if b < support(ax, ay, lo0, lo1, hi0, hi1):
+                in_disk[k] = b < disk_support(ax, ay, ux, uy, s)
+                norm = np.hypot(ax, ay)
+                if norm > 0.0:
+                    rows[k, 0], rows[k, 1], rows[k, 2] = ax / norm, ay / norm, b / norm
+                else:
+                    rows[k, 0], rows[k, 1], rows[k, 2] = 0.0, 0.0, b
+                k += 1
+        if b_min >= 0.0:
+            kept = 0
+            for r in range(k):
+                if in_disk[r]:
+                    rows[kept, 0], rows[kept, 1], rows[kept, 2] = rows[r, 0], rows[r, 1], rows[r, 2]
+                    kept += 1
+            k = kept
+        ok, act, vio = solve_rows(ux, uy, rows, k, lo0, lo1, hi0, hi1, out[e, i])
+        feasible[e, i], active[e, i], violation[e, i], n_rows[e, i] = ok, act, vio, k
+        dx, dy = out[e, i, 0] - ux, out[e, i, 1] - uy
+        moved[e, i] = np.sqrt(dx * dx + dy * dy)
+    return min_h
+
+
+@njit(cache=True, inline="always")
+def _scratch(n):
+    """One env's rows (at most one a neighbour) and their disk flags."""
+    m = max(n - 1, 1)
+    return np.empty((m, 3)), np.empty(m, dtype=np.bool_)
+
+
+def _outputs(E: int, n: int) -> tuple[NDArray, ...]:
+    """The arrays :func:`_serial` and :func:`_parallel` fill: allocated here, as a compiled
+    function's returned arrays cost more each to hand back to Python (measured at 6 agents)."""
+    return (
+        np.empty((E, n, 2)),
+        np.empty((E, n), dtype=np.bool_),
+        np.empty((E, n), dtype=np.int64),
+        np.empty((E, n)),
+        np.empty((E, n), dtype=np.int64),
+        np.empty(E),
+        np.empty((E, n)),
+    )
+
+
+@njit(cache=True)
+def _serial(x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violation, n_rows, min_h,
+            moved):  # fmt: skip
+    rows, in_disk = _scratch(x.shape[1])
+    for e in range(x.shape[0]):
+        min_h[e] = _one_env(
+            e, x, nom, omega, gamma, radii, lo, hi, rows, in_disk, out, feasible, active,
+            violation, n_rows, moved,
+        )  # fmt: skip
+
+
+@njit(cache=True, parallel=True)
+def _parallel(x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violation, n_rows, min_h,
+              moved):  # fmt: skip
+    for e in prange(x.shape[0]):
+        rows, in_disk = _scratch(x.shape[1])
+        min_h[e] = _one_env(
+            e, x, nom, omega, gamma, radii, lo, hi, rows, in_disk, out, feasible, active,
+            violation, n_rows, moved,
+        )  # fmt: skip
+
+
+def _flat(a: NDArray, shape: tuple[int, ...]) -> NDArray[np.float64]:
+    """``a`` as contiguous floats of ``shape``: the bodies' own arrays have it already."""
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    return a if a.shape == shape else a.reshape(shape)
+
+
+def filter_dense(
+    positions: NDArray[np.float64],
+    nominal: NDArray[np.float64],
+    omega: NDArray[np.float64],
+    gamma: float,
+    radii: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
+    """Safe single-integrator controls of E envs x N agents, every pair of an env examined.
+
+    positions, nominal (E, N, 2); omega (E, N, N); radii (E, N) body radii (a pair is safe at
+    ``r_i + r_j``); lo, hi (E, N, 2) each agent's box (the bodies' flat (E N,) and (E N, 2)
+    serve as well). Returns actions (E, N, 2), feasible, active row count, largest normalised
+    violation, rows kept after culling (E, N), each env's smallest barrier value (E,), and the
+    intervention |u_safe - u_nominal| (E, N).
+    """
+    E, n = positions.shape[:2]
+    outputs = _outputs(E, n)
+    args = (
+        np.ascontiguousarray(positions, dtype=np.float64),
+        np.ascontiguousarray(nominal, dtype=np.float64),
+        np.ascontiguousarray(omega, dtype=np.float64),
+        float(gamma),
+        _flat(radii, (E * n,)),
+        _flat(lo, (E * n, 2)),
+        _flat(hi, (E * n, 2)),
+        *outputs,
+    )
+    # the form chosen here, not in compiled code: a parallel kernel called from another
+    # compiled function runs many times slower
+    threads.launch(_serial, _parallel, E * n, *args)
+    return outputs

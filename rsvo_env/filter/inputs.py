@@ -1,0 +1,84 @@
+"""The checks of :meth:`rsvo_env.filter.safety.SafetyFilter.filter` beyond positions and scores:
+per-agent bodies, obstacles and headings. Each raises ``ValueError`` naming the field, the
+agent and the value."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rsvo_env.filter.config import FilterConfig
+from rsvo_env.geometry.bodies import Bodies, check_per_agent
+from rsvo_env.geometry.obstacles import Obstacles
+from rsvo_env.util.validation import real_array
+
+
+def check_bodies(
+    cfg: FilterConfig,
+    lead: tuple[int, ...],
+    n: int,
+    radii: ArrayLike | None,
+    u_max: ArrayLike | None,
+) -> Bodies | None:
+    """The checked per-agent radii and limits of :meth:`filter` (None: the config's)."""
+    if radii is None and u_max is None:
+        return None
+    if not cfg.model.per_agent_bodies:
+        raise ValueError(
+            f"radii and u_max per agent are not available for the {cfg.dynamics}: it takes "
+            "one safety_radius and one box (FilterConfig)"
+        )
+    if u_max is not None and not cfg.model.per_agent_limits:
+        raise ValueError(f"u_max per agent is not available for the {cfg.dynamics}")
+    if u_max is not None and cfg.u_min is not None:
+        raise ValueError(
+            "u_max per agent gives each agent the box [-u_max_i, u_max_i]; it cannot be "
+            f"combined with FilterConfig.u_min = {cfg.u_min!r}"
+        )
+    shape = (*lead, n)
+    r = None if radii is None else check_per_agent(radii, "radii", shape)
+    u = None if u_max is None else check_per_agent(u_max, "u_max", shape)
+    E = lead[0] if lead else 1
+    return Bodies.of(cfg, E, n, r, u)
+
+
+def check_obstacles(obstacles: Obstacles | None, lead: tuple[int, ...]) -> NDArray | None:
+    """The capsules of ``obstacles`` (None without), one set for every scene or one an env."""
+    if obstacles is None:
+        return None
+    if not isinstance(obstacles, Obstacles):
+        raise ValueError(
+            f"obstacles = {obstacles!r}: pass an Obstacles (Obstacles.of(circles=, walls=, "
+            "thickness=))"
+        )
+    caps = obstacles.capsules
+    if caps.ndim == 3 and (not lead or caps.shape[0] != lead[0]):
+        raise ValueError(
+            f"obstacles has capsules of shape {caps.shape}: one set (O, 5) for every scene, "
+            f"or one an env ({lead[0] if lead else 1}, O, 5)"
+        )
+    return caps
+
+
+def check_headings(headings: ArrayLike | None, shape: tuple[int, ...], model: str) -> NDArray:
+    """Finite headings (radians) of the given shape, required by ``model``."""
+    if headings is None:
+        raise ValueError(f"headings are required for the {model}")
+    hd = real_array(headings, "headings")
+    if hd.shape != shape:
+        raise ValueError(f"headings has shape {hd.shape}, expected {shape}")
+    if not np.isfinite(hd).all():
+        idx = tuple(int(k) for k in np.argwhere(~np.isfinite(hd))[0])
+        where = "".join(f"[{k}]" for k in idx)
+        raise ValueError(f"headings{where} = {float(hd[idx])!r} is not finite (agent {idx[-1]})")
+    return hd
+
+
+def check_holonomic(holonomic: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.bool_]:
+    """One bool per agent (True: a single integrator in a mixed crowd of unicycles)."""
+    arr = np.asarray(holonomic)
+    if arr.dtype != np.bool_:
+        raise ValueError(f"holonomic must be bools (True: a single integrator), got {arr.dtype}")
+    if arr.shape != shape:
+        raise ValueError(f"holonomic has shape {arr.shape}, expected {shape}")
+    return arr

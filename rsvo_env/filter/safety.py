@@ -1,0 +1,385 @@
+"""The standalone R-CBF safety filter: plain arrays in, safe actions out.
+
+``SafetyFilter.filter`` builds every agent's rows (``barriers``) with the responsibility weights
+(``responsibility``) and solves every agent's QP (paper, eq. ``qp`` and Algorithm 1) in one batch
+(``solvers``). It works on arrays in physical units, so any simulator can call it: one scene of
+N agents, (N, 2), or E independent scenes at once, (E, N, 2), pairs never crossing scenes. The
+simulation core calls :meth:`SafetyFilter.apply`, the same computation without the input checks,
+as the stage of its step right before integration.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rsvo_env.dynamics.unicycle import rotate_rows
+from rsvo_env.filter import dense as dense_solver
+from rsvo_env.filter import projection_disk
+from rsvo_env.filter import statistics as scene_barrier
+from rsvo_env.filter.config import FilterConfig
+from rsvo_env.filter.inputs import (
+    check_bodies,
+    check_headings,
+    check_holonomic,
+    check_obstacles,
+)
+from rsvo_env.filter.result import FilterResult, per_env
+from rsvo_env.geometry import pairs
+from rsvo_env.geometry.bodies import Bodies
+from rsvo_env.geometry.obstacles import Obstacles
+from rsvo_env.qp import solve as solvers
+from rsvo_env.responsibility.svo import (
+    min_pair_weight,
+    smallest_weight,
+    validate_weight_matrix,
+    weight_matrix,
+)
+from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
+from rsvo_env.util.planar import norm
+from rsvo_env.util.validation import check_theta, check_vectors, real_array
+
+
+class SafetyFilter:
+    """The decentralized responsibility-associated CBF filter (paper, Algorithm 1), batched."""
+
+    def __init__(self, config: FilterConfig | None = None, **kwargs: object) -> None:
+        if config is not None and kwargs:
+            raise TypeError("pass either a FilterConfig or keyword arguments, not both")
+        self.config = config if config is not None else FilterConfig(**kwargs)  # type: ignore[arg-type]
+        # per kind ("floor", "matrix"): the last scores and what the configured weighting
+        # gave for them (a simulator calls with the same scores step after step)
+        self._kept: dict[str, tuple[NDArray, Any]] = {}
+        self._default_bodies: dict[tuple[int, int], Bodies] = {}
+        # the last culling radii: (floor, bodies, radii, reach), see _culling_radii
+        self._radii: tuple[pairs.Floor, Bodies, NDArray, NDArray] | None = None
+        # the last floor and its weights times gamma (the search by the nominal)
+        self._scaled_floor: tuple[pairs.Floor | None, NDArray | None] = (None, None)
+        # the agents the last search by the nominal found exempt (likely again: a jam holds)
+        self._exempt = np.zeros(0, dtype=bool)
+
+    def pair_radius(
+        self,
+        theta: NDArray,
+        omega: NDArray | None,
+        omega_min: NDArray | None = None,
+        bodies: Bodies | None = None,
+    ) -> float:
+        """Radius of the pair search: the sensing radius (single integrator) or the user's.
+        ``omega_min``: each scene's smallest weight, when the caller keeps it."""
+        cfg = self.config
+        if not cfg.model.radius_from_weights:  # the state decides: no radius of the weights
+            return cfg.neighbor_radius if cfg.neighbor_radius is not None else float("inf")
+        if omega_min is not None:
+            w_min = float(np.min(omega_min))
+        elif omega is not None:
+            w_min = float(np.min(smallest_weight(omega)))
+        else:
+            th = theta.reshape(-1, theta.shape[-1])
+            w_min = min(min_pair_weight(t, cfg.weighting) for t in th)
+        if bodies is None:  # the config's: the same radius and box for every agent
+            bodies = Bodies.of(cfg, 1, 1)
+        radius = cfg.model.search_radius(cfg, w_min, bodies)
+        if cfg.neighbor_radius is not None:
+            if cfg.neighbor_radius < radius:
+                warnings.warn(
+                    f"neighbor_radius = {cfg.neighbor_radius} is below the sensing radius "
+                    f"{radius:.6g} beyond which no row can bind: the safety guarantee no longer "
+                    "holds",
+                    stacklevel=4,
+                )
+            return cfg.neighbor_radius
+        return radius
+
+    def pair_weights(
+        self,
+        theta: NDArray,
+        omega: NDArray | None,
+        I: NDArray,
+        J: NDArray,
+        weighting: Sequence[str] | None = None,
+    ) -> NDArray[np.float64]:
+        """(P, 2) weights of each pair (flat agent indices): omega_IJ and omega_JI (Thm. 1),
+        summing to 1. ``theta`` is (N,) or (E, N), ``omega`` (N, N) or (E, N, N);
+        ``weighting``: each env's named weighting, for scores without a matrix (else the
+        configured one)."""
+        mode = self.config.weighting
+        n = theta.shape[-1]
+        if omega is None and weighting is not None:
+            return pairs.weights_of(theta.reshape(-1, n), weighting, I, J)
+        if omega is None and callable(mode):
+            omega = weight_matrix(theta, mode)
+        if omega is not None:
+            return pairs.omega_pairs(np.ascontiguousarray(omega).reshape(-1, n), I, J, n)
+        if mode == "symmetric":
+            return np.full((len(I), 2), 0.5)
+        return pairs.scored_pairs(theta.reshape(-1, n), I, J)
+
+    def filter(
+        self,
+        positions: ArrayLike,
+        nominal: ArrayLike,
+        theta: ArrayLike,
+        velocities: ArrayLike | None = None,
+        omega: ArrayLike | None = None,
+        radii: ArrayLike | None = None,
+        u_max: ArrayLike | None = None,
+        obstacles: Obstacles | None = None,
+        headings: ArrayLike | None = None,
+        holonomic: ArrayLike | None = None,
+    ) -> FilterResult:
+        """Safe actions (paper, eq. ``qp`` per agent) for one scene or a batch of scenes.
+
+        positions, nominal, velocities: (N, 2) or (E, N, 2) in physical units; theta: (N,) or
+        (E, N) personality scores; omega: optional weight matrix, (N, N) or (E, N, N), that
+        replaces the configured weighting (validated on every call); radii: optional body
+        radii, (N,) or (E, N), a pair safe at ``r_i + r_j`` (default: ``safety_radius / 2``
+        each); u_max: optional per-agent input bound, (N,) or (E, N), the box
+        ``[-u_max_i, u_max_i]`` per component (default: the config's box); obstacles: static
+        circles and walls (:class:`rsvo_env.geometry.obstacles.Obstacles`), one row each, weight 1;
+        headings: (N,) or (E, N) radians, for the unicycle (nominal and actions are then
+        (v, w), ``docs/unicycle.md``); holonomic: (N,) or (E, N) bools, for the unicycle: the
+        agents that are single integrators in a mixed crowd (their nominal and action a world
+        velocity, each component within ``u_max``). Bad input raises ``ValueError`` naming
+        field, agent and value.
+        """
+        cfg = self.config
+        pos = check_vectors(positions, "positions", lead=None)
+        single = pos.ndim == 2
+        lead, n = pos.shape[:-2], pos.shape[-2]
+        if n < 1:
+            raise ValueError("positions has no agents: the filter needs at least one")
+        nom = check_vectors(nominal, "nominal", n, lead=lead)
+        th = check_theta(theta) if single else real_array(theta, "theta")
+        if th.shape != (*lead, n):
+            raise ValueError(
+                f"theta has shape {th.shape}, expected {(*lead, n)} (one score per agent)"
+                if not single
+                else f"theta has {th.shape[0]} entries, expected {n} (one per agent)"
+            )
+        if not single:
+            for e in range(lead[0]):
+                check_theta(th[e], name=f"theta[{e}]")
+        W = None
+        if omega is not None:
+            W_in = real_array(omega, "omega")
+            if W_in.shape != (*lead, n, n):
+                raise ValueError(f"omega has shape {W_in.shape}, expected {(*lead, n, n)}")
+            W = np.stack([validate_weight_matrix(w, n) for w in W_in.reshape(-1, n, n)])
+        bodies = check_bodies(cfg, lead, n, radii, u_max)
+        vel = None
+        if cfg.model.needs_velocities:
+            if velocities is None:
+                raise ValueError(f"velocities are required for the {cfg.dynamics}")
+            vel = check_vectors(velocities, "velocities", n, lead=lead)
+        caps = check_obstacles(obstacles, lead)
+        hd = None
+        if cfg.model.needs_headings:
+            hd = check_headings(headings, (*lead, n), cfg.dynamics)
+            hd = hd[None] if single else hd
+            if holonomic is not None:
+                mask = check_holonomic(holonomic, (*lead, n)).reshape(-1)
+                if bodies is None:
+                    bodies = Bodies.of(cfg, lead[0] if lead else 1, n)
+                bodies = bodies.with_holonomic(mask, float(np.max(cfg.u_max)), cfg.lookahead)
+        elif holonomic is not None:
+            raise ValueError(
+                f"holonomic is for the unicycle's mixed crowds, not the {cfg.dynamics}"
+            )
+        kw = {"bodies": bodies, "obstacles": caps, "headings": hd}
+        if single:
+            pos, nom, th = pos[None], nom[None], th[None]
+            vel = None if vel is None else vel[None]
+        res = self.apply(pos, nom, th, vel, W, **kw)
+        if res.rows is None:  # the compiled pass keeps none: built if asked for, from a copy
+            args = tuple(None if a is None else a.copy() for a in (pos, nom, th, vel, W))
+            res.rows_later = lambda: self.apply(*args, with_rows=True, **kw).rows
+        return res.squeeze() if single else res
+
+    def apply(
+        self,
+        positions: NDArray[np.float64],
+        nominal: NDArray[np.float64],
+        theta: NDArray[np.float64],
+        velocities: NDArray[np.float64] | None = None,
+        omega: NDArray[np.float64] | None = None,
+        with_rows: bool = False,
+        omega_min: NDArray[np.float64] | None = None,
+        nearest: NDArray[np.float64] | None = None,
+        floor: pairs.Floor | None = None,
+        weighting: Sequence[str] | None = None,
+        bodies: Bodies | None = None,
+        obstacles: NDArray | None = None,
+        headings: NDArray | None = None,
+    ) -> FilterResult:
+        """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
+
+        One call of the row builder and one of the solver serve all E x N agents. Dense
+        single-integrator scenes with the exact solver take one compiled pass
+        (``solvers.dense``, the same arithmetic) unless ``with_rows`` asks for the rows. A caller
+        that keeps them passes each scene's smallest weight ``omega_min`` (E,), each agent's
+        nearest distance ``nearest`` (E, N) and ``floor``, :func:`pairs.weight_floor` of the
+        weights, which the large-N path needs. There, each agent examines its neighbours within
+        its own radius (:func:`pairs.agent_radii`, :func:`pairs.double_integrator_radii` from
+        the current velocities): exact culling, so the rows kept, and the solution, are those
+        of all pairs. ``bodies``: each agent's radius and box (None: the config's);
+        ``obstacles``: capsules (O, 5) or (E, O, 5)
+        (:class:`rsvo_env.geometry.obstacles.Obstacles`);
+        ``headings`` (E, N): for a model that needs them (the unicycle).
+        """
+        cfg = self.config
+        E, n = theta.shape
+        if bodies is None:  # the config's, kept: a simulator calls with the same shape
+            bodies = self._default_bodies.get((E, n))
+            if bodies is None:
+                bodies = self._default_bodies[(E, n)] = Bodies.of(cfg, E, n)
+        if obstacles is not None and len(obstacles) == 0:
+            obstacles = None
+        dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
+        fast = not with_rows and obstacles is None and cfg.model.dense_kernel
+        if fast and cfg.solver == "exact" and cfg.neighbor_radius is None:
+            if n <= dense_solver.MAX_AGENTS:  # the compiled all-pairs pass
+                omega = self._matrix(theta, weighting) if omega is None else omega
+                return self._apply_dense(positions, nominal, omega, bodies)
+        solve_nominal, solve_box, rotation = nominal, bodies, None
+        if cfg.model.needs_headings:
+            # the rows live on points of the model's own (the unicycle's look-ahead points)
+            positions, solve_nominal, bodies, rotation = cfg.model.lift(
+                cfg, positions, headings, nominal, bodies
+            )
+            nearest = None
+        pos = positions.reshape(E * n, 2)
+        vel = None if velocities is None else velocities.reshape(E * n, 2)
+        caps = obstacles if obstacles is None or obstacles.ndim == 3 else obstacles[None]
+
+        def rows_of(I: NDArray, J: NDArray) -> tuple[Any, Any]:
+            weights = self.pair_weights(theta, omega, I, J, weighting)
+            rows, obstacle_h = cfg.model.filter_rows(cfg, pos, vel, weights, I, J, bodies, caps, n)
+            if rotation is not None:
+                rows = replace(rows, flat_A=rotate_rows(rows.flat_A, rows.owner, rotation))
+            return rows, obstacle_h
+
+        reach, rows = None, None
+        if dense:
+            # Few agents: every pair, and exact culling drops the rows that cannot bind.
+            I, J = pairs.all_pairs(n, E)
+        elif cfg.neighbor_radius is None:
+            if floor is None:
+                floor = self._floor(theta, omega)
+            radii, reach = self._culling_radii(floor, velocities, bodies)
+            # the search by the nominal pays where the scores spread (an altruist's radius
+            # against egoists spans many neighbours); with one group of scores its tests
+            # cost more than the pairs they drop (measured: docs/math.md)
+            if cfg.model.nominal_disk and floor[0].shape[-1] > 1:
+                if self._scaled_floor[0] is not floor:  # kept while the floor is
+                    self._scaled_floor = (floor, floor[0] * cfg.gamma)
+                likely = self._exempt if self._exempt.shape == (E * n,) else None
+                I, J, rows, obstacle_h, reach, self._exempt = projection_disk.search(
+                    cfg, positions, nominal, floor, self._scaled_floor[1], radii, bodies,
+                    rows_of, likely,
+                )  # fmt: skip
+            else:
+                I, J = pairs.pairs_within_agent_radii(positions, radii, floor)
+        else:
+            radius = self.pair_radius(theta, omega, omega_min, bodies)
+            I, J = pairs.candidate_pairs(positions, radius)
+        if rows is None:
+            rows, obstacle_h = rows_of(I, J)
+        if cfg.model.nominal_disk:
+            exempt = projection_disk.negative_rows(rows.offsets, rows.flat_b)
+            rows = projection_disk.cull(rows, nominal.reshape(-1, 2), exempt)
+        actions, feasible, active, violation = solvers.solve(
+            cfg.solver, solve_nominal.reshape(E * n, 2), rows.flat_A, rows.flat_b, rows.offsets,
+            solve_box.lo, solve_box.hi,
+        )  # fmt: skip
+        actions = cfg.model.lower(cfg, actions, solve_box)
+        nom = nominal.reshape(E * n, 2)
+        env_of_row = rows.owner // n
+        return FilterResult(
+            actions=actions.reshape(E, n, 2),
+            feasible=feasible.reshape(E, n),
+            intervention=norm(actions - nom).reshape(E, n),
+            active=active.reshape(E, n),
+            min_h=scene_barrier.min_h(
+                rows, positions, I, dense, bodies, cfg.model, nearest, reach, obstacle_h
+            ),
+            max_violation=violation.reshape(E, n),
+            n_rows=rows.counts.reshape(E, n),
+            n_unrecoverable_pairs=per_env(env_of_row, rows.flat_unrecoverable, E) // 2,
+            n_capped_shares=per_env(env_of_row, rows.flat_capped, E),
+            kept_rows=rows,
+        )
+
+    def _culling_radii(
+        self, floor: pairs.Floor, velocities: NDArray | None, bodies: Bodies
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Each agent's search radius per score group (E, N, K) and each scene's smallest (E,).
+        Radii that do not depend on the state (models without velocities) are kept for the
+        floor and bodies they came from: a simulator steps with the same ones, step after step."""
+        cfg = self.config
+        kept = self._radii
+        state_free = not cfg.model.needs_velocities
+        if state_free and kept is not None and kept[0] is floor and kept[1] is bodies:
+            return kept[2], kept[3]
+        radii = cfg.model.culling_radii(cfg, floor[0], velocities, bodies)
+        reach = np.where(radii > 0, radii, np.inf).min(axis=(1, 2))
+        if state_free:
+            self._radii = (floor, bodies, radii, reach)
+        return radii, reach
+
+    def _floor(self, theta: NDArray, omega: NDArray | None) -> pairs.Floor:
+        """:func:`pairs.weight_floor` of the weights in force, from the scores alone (O(N)
+        memory) for a named weighting."""
+        if omega is not None:  # a caller's matrix, whatever the configured mode says
+            return pairs.weight_floor(omega)
+        return self._of_scores("floor", theta, pairs.floor_of)
+
+    def _matrix(self, theta: NDArray, weighting: Sequence[str] | None) -> NDArray:
+        """(E, N, N) weight matrices of ``theta`` (E, N): each env's named ``weighting``, or
+        the configured one. A caller steps with the same scores step after step, so the last
+        matrices of a named configured weighting are kept (a callable is asked every time)."""
+        if weighting is not None:
+            return np.stack([weight_matrix(t, m) for t, m in zip(theta, weighting, strict=True)])
+        return self._of_scores("matrix", theta, weight_matrix)
+
+    def _of_scores(self, kind: str, theta: NDArray, build: Callable) -> Any:
+        """``build(theta, weighting)`` of the configured weighting, kept for the last scores of
+        each ``kind`` when the weighting is named (a callable is asked every time)."""
+        mode = self.config.weighting
+        if callable(mode):
+            return build(theta, mode)
+        last = self._kept.get(kind)
+        if last is None or not np.array_equal(last[0], theta):
+            last = self._kept[kind] = (theta.copy(), build(theta, mode))
+        return last[1]
+
+    def _apply_dense(
+        self,
+        positions: NDArray,
+        nominal: NDArray,
+        omega: NDArray,
+        bodies: Bodies,
+    ) -> FilterResult:
+        cfg = self.config
+        actions, feasible, active, violation, n_rows, min_h, intervention = (
+            dense_solver.filter_dense(
+                positions, nominal, omega, cfg.gamma, bodies.radii, bodies.lo, bodies.hi
+            )
+        )
+        zeros = np.zeros(len(min_h), dtype=np.int64)
+        return FilterResult(
+            actions=actions,
+            feasible=feasible,
+            intervention=intervention,
+            active=active,
+            min_h=min_h,
+            max_violation=violation,
+            n_rows=n_rows,
+            n_unrecoverable_pairs=zeros,
+            n_capped_shares=zeros,
+        )

@@ -1,0 +1,1 @@
+"""Bodies, obstacles, clearance and the pair search (which pairs can interact)."""

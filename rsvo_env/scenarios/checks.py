@@ -1,0 +1,68 @@
+"""Checks of a scene (starts, goals, bodies, obstacles) and of the filter it is stepped with:
+each raises ``ValueError`` naming the agent, the obstacle and the values."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rsvo_env.dynamics import Dynamics
+from rsvo_env.geometry.clearance import contact
+from rsvo_env.geometry.obstacles import nearest_points
+
+if TYPE_CHECKING:
+    from rsvo_env.filter.safety import SafetyFilter
+    from rsvo_env.scenarios.base import Scenario
+
+
+def check_scene(scenario: Scenario, starts: NDArray, goals: NDArray, capsules: NDArray) -> None:
+    """Starts in the safe set (every pair at least ``r_i + r_j`` apart, every body clear of
+    every obstacle) and no goal inside an obstacle."""
+    radii = scenario.radii
+    n = len(starts)
+    if n >= 2:
+        ratio = contact(starts[None], radii)[0]  # O(N) on a grid
+        i = int(np.argmin(ratio))
+        if ratio[i] < 1.0:
+            d = np.linalg.norm(starts - starts[i], axis=1)
+            others = np.where(np.arange(n) == i, np.inf, d / (radii[i] + radii))
+            j = int(np.argmin(others))
+            raise ValueError(
+                f"starting positions of agents {i} and {j} overlap: distance {float(d[j])!r} "
+                f"< {float(radii[i] + radii[j])!r}, the sum of their radii (h < 0)"
+            )
+    if len(capsules) == 0:
+        return
+    expected = (scenario.num_obstacles, 5)
+    if capsules.shape != expected:
+        raise ValueError(
+            f"{scenario.name}: obstacles have shape {capsules.shape}, expected {expected}"
+        )
+    for what, points, margin in (("start", starts, radii), ("goal", goals, radii)):
+        c = nearest_points(points, capsules)
+        gap = np.linalg.norm(points[:, None, :] - c, axis=-1) - capsules[:, 4] - margin[:, None]
+        i, o = np.unravel_index(int(np.argmin(gap)), gap.shape)
+        if gap[i, o] < 0:
+            raise ValueError(
+                f"the {what} of agent {i}, {points[i].tolist()}, is inside obstacle {o} "
+                f"(its body would overlap it by {float(-gap[i, o])!r})"
+            )
+
+
+def check_scene_filter(scenario: Scenario, flt: SafetyFilter) -> None:
+    """A filter for the scenario: its model, and support for the scene's bodies and obstacles."""
+    model = flt.config.model
+    if model != scenario.model:
+        raise ValueError(
+            f"filter dynamics {flt.config.dynamics!r} != scenario {scenario.dynamics!r}"
+        )
+    if not model.per_agent_bodies and not np.all(scenario.radii == scenario.radii[0]):
+        raise ValueError(f"bodies of different radii are not available for the {model.name} yet")
+    if scenario.agent_limits is not None and not (
+        model.per_agent_bodies and model.per_agent_limits
+    ):
+        raise ValueError(f"input bounds per agent are not available for the {model.name} yet")
+    if scenario.num_obstacles and type(model).obstacle_rows is Dynamics.obstacle_rows:
+        raise ValueError(f"obstacles are not available for the {model.name} yet")

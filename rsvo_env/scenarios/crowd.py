@@ -1,0 +1,102 @@
+"""The crowd: N agents with seeded random starts and goals in a square (the stress and scaling
+case), drawn by grid dart throwing."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from rsvo_env.scenarios.base import Scenario
+
+
+@njit(cache=True)
+def _accept(cand, pts, count, spacing, side):
+    """Append to ``pts[:count]`` each candidate at least ``spacing`` from every accepted point,
+    in order, until ``pts`` is full; a grid of cells of side ``spacing`` (at most 4 points each)
+    makes each test O(1). Returns the new count."""
+    n = pts.shape[0]
+    cells = max(int(np.ceil(side / spacing)), 1)
+    grid = np.full((cells, cells, 4), -1, dtype=np.int64)
+
+    def cell(v):
+        return min(max(int((v + side / 2) / spacing), 0), cells - 1)
+
+    for p in range(count):
+        cx, cy = cell(pts[p, 0]), cell(pts[p, 1])
+        for s in range(4):
+            if grid[cx, cy, s] < 0:
+                grid[cx, cy, s] = p
+                break
+    s2 = spacing * spacing
+    for c in range(cand.shape[0]):
+        if count == n:
+            break
+        x, y = cand[c, 0], cand[c, 1]
+        cx, cy = cell(x), cell(y)
+        ok = True
+        for gx in range(max(cx - 1, 0), min(cx + 2, cells)):
+            for gy in range(max(cy - 1, 0), min(cy + 2, cells)):
+                for s in range(4):
+                    q = grid[gx, gy, s]
+                    if q >= 0 and (pts[q, 0] - x) ** 2 + (pts[q, 1] - y) ** 2 < s2:
+                        ok = False
+        if ok:
+            pts[count, 0], pts[count, 1] = x, y
+            for s in range(4):
+                if grid[cx, cy, s] < 0:
+                    grid[cx, cy, s] = count
+                    break
+            count += 1
+    return count
+
+
+class Crowd(Scenario):
+    """N agents with seeded random starts and goals in a square: the stress and scaling case."""
+
+    name = "crowd"
+    positive = (*Scenario.positive, "spacing_factor", "side_factor")
+    defaults = {
+        "num_agents": 12,
+        "safety_radius": 1.0,
+        "u_max": 2.0,
+        "k": 2.0,
+        "gamma": 10.0,
+        "rh_angle_deg": 30.0,
+        "rh_trigger_factor": 1.5,
+        "spacing_factor": 1.2,
+        "side_factor": 2.5,
+        "max_steps": 2000,
+        "nominal": "rorca",
+    }
+
+    @property
+    def side(self) -> float:
+        return self.params["side_factor"] * np.sqrt(self.num_agents) * self.params["safety_radius"]
+
+    def _spread(self, rng: np.random.Generator) -> NDArray[np.float64]:
+        """N points uniform in the square, pairwise >= spacing apart: dart throwing in batches,
+        each candidate accepted in draw order (so the layout is a function of the seed alone)
+        against a grid of accepted points, O(N) per batch."""
+        n, side = self.num_agents, self.side
+        spacing = self.params["spacing_factor"] * self.params["safety_radius"]
+        pts = np.empty((n, 2))
+        count = 0
+        for _ in range(10000):
+            cand = rng.uniform(-side / 2, side / 2, (max(2 * (n - count), 8), 2))
+            count = _accept(cand, pts, count, spacing, side)
+            if count == n:
+                return pts
+        raise ValueError(
+            f"crowd: could not place {n} agents {spacing} apart in a square of side {side:.3g}; "
+            "raise side_factor or lower spacing_factor"
+        )
+
+    def initial_state(self, rng):
+        start = self._spread(rng)
+        goals = self._spread(rng)
+        return start, np.zeros_like(start), goals
+
+    def arena(self):
+        h = self.side / 2 + self.params["safety_radius"]
+        return np.array([-h, -h]), np.array([h, h])

@@ -1,0 +1,109 @@
+"""How many threads the library's compiled kernels use (``docs/threads.md``).
+
+One by default. A parallel kernel (numba's OpenMP or TBB pool) pays only while its threads have
+cores: where several processes share few cores, as SB3's ``SubprocVecEnv``, Ray's env runners,
+``pytest -n`` and sweeps do, each launch waits for workers that other processes' threads hold,
+and the step becomes many times slower than one thread's (``benchmarks/results/contention.md``).
+One thread cannot stall, and the library's throughput tables are measured with one. A process
+that has its cores to itself opts in: ``RSVO_NUM_THREADS=2`` in the environment, or
+:func:`set_num_threads` (:func:`using` for a block). Kernels then run in parallel over at least
+:data:`PARALLEL_THRESHOLD` independent problems, below which a launch costs more than it saves.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import numba
+import numpy as np
+
+ENV_VAR = "RSVO_NUM_THREADS"
+# independent QPs a call below which a parallel launch costs more than the work (measured:
+# benchmarks/results/contention.md, kernel section)
+PARALLEL_THRESHOLD = 256
+# Agents a call from which a kernel's prange form, run on one thread, beats its serial form:
+# numba compiles a prange body as a function of its own whose arrays it marks free of aliasing
+# (parfor lowering), and the compiler then keeps the inner loops' values in registers. On one
+# thread a launch costs about 1 us and waits for no other thread, so it cannot stall under
+# load. Measured for the dense filter pass and the CSR solve (benchmarks/kernel_forms.py): the
+# prange form takes 1.35x the serial form's time at 6 agents, 1.10x at 32, 0.61x to 0.99x from
+# 48 on
+OUTLINED_THRESHOLD = 64
+
+
+def _checked(value: object, name: str) -> int:
+    """A thread count: an integer from 1 to numba's pool size (``NUMBA_NUM_THREADS``)."""
+    limit = numba.config.NUMBA_NUM_THREADS
+    if isinstance(value, str):
+        try:
+            value = int(value.strip())
+        except ValueError:
+            raise ValueError(f"{name} = {value!r} is not an integer thread count") from None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name} = {value!r} must be an integer thread count")
+    n = int(value)
+    if not 1 <= n <= limit:
+        raise ValueError(f"{name} = {n} must be from 1 to numba's pool size, {limit}")
+    return n
+
+
+_threads = _checked(os.environ.get(ENV_VAR, "1"), ENV_VAR)
+
+
+def get_num_threads() -> int:
+    """The threads the library's kernels use (1 unless opted in)."""
+    return _threads
+
+
+def set_num_threads(n: int) -> None:
+    """Let the library's kernels use ``n`` threads (1: serial kernels only). Raises
+    ``ValueError`` naming the value unless ``1 <= n <= NUMBA_NUM_THREADS``."""
+    global _threads
+    _threads = _checked(n, "threads")
+
+
+@contextmanager
+def using(n: int) -> Iterator[None]:
+    """``n`` threads for the kernels within the block, the previous count after it."""
+    before = _threads
+    set_num_threads(n)
+    try:
+        yield
+    finally:
+        set_num_threads(before)
+
+
+def parallel(work: int) -> bool:
+    """Whether a kernel over ``work`` independent problems runs in parallel, and if so with the
+    library's thread count (numba's own count is per calling thread, so it is set here)."""
+    if _in_parallel(work):
+        numba.set_num_threads(_threads)
+        return True
+    return False
+
+
+def _in_parallel(work: int) -> bool:
+    """The one rule for running in parallel: opted in, and enough independent problems."""
+    return _threads > 1 and work >= PARALLEL_THRESHOLD
+
+
+def launch(serial: Callable, prange: Callable, work: int, *args: Any) -> Any:
+    """Call the form of a kernel that pays over ``work`` agents: its ``prange`` form on the
+    library's threads in parallel (:func:`parallel`'s rule) or on one thread from
+    :data:`OUTLINED_THRESHOLD` agents (faster than the plain loop there), else ``serial``.
+    numba's thread count for the calling thread, which a user's own kernels read, is set for
+    the launch only and put back after it."""
+    n = _threads if _in_parallel(work) else int(work >= OUTLINED_THRESHOLD)
+    if not n:
+        return serial(*args)
+    caller = numba.get_num_threads()
+    if caller == n:
+        return prange(*args)
+    numba.set_num_threads(n)
+    try:
+        return prange(*args)
+    finally:
+        numba.set_num_threads(caller)

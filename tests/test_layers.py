@@ -1,0 +1,146 @@
+"""The house (docs/architecture.md): no import cycle in rsvo_env over any form of import, the
+layers kept as import-linter's contracts, a top level that shows the subpackages."""
+
+from __future__ import annotations
+
+import ast
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "rsvo_env"
+
+
+def module_name(path: Path, root: Path) -> str:
+    parts = list(path.relative_to(root.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def import_graph(root: Path = PACKAGE) -> dict[str, set[str]]:
+    """Module -> the package's modules it imports: at module level, under TYPE_CHECKING and
+    inside functions alike; ``from a import b`` counts as importing ``a.b`` when b is a module,
+    else ``a`` (its ``__init__``)."""
+    files = {module_name(p, root): p for p in root.rglob("*.py")}
+    top = root.name
+
+    def resolve(name: str) -> str | None:
+        while name and name not in files:
+            name = name.rpartition(".")[0]
+        return name or None
+
+    graph: dict[str, set[str]] = {}
+    for name, path in files.items():
+        deps: set[str | None] = set()
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                deps |= {resolve(a.name) for a in node.names if a.name.split(".")[0] == top}
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    parts = package.split(".")
+                    base = ".".join(parts[: len(parts) - node.level + 1] + ([base] if base else []))
+                if base.split(".")[0] != top:
+                    continue
+                for a in node.names:
+                    full = f"{base}.{a.name}"
+                    deps.add(full if full in files else resolve(base))
+        graph[name] = {d for d in deps if d and d != name}
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    found: list[list[str]] = []
+    for start in graph:
+        if start in index:
+            continue
+        work = [(start, iter(sorted(graph[start])))]
+        index[start] = low[start] = len(index)
+        stack.append(start)
+        on.add(start)
+        while work:
+            v, edges = work[-1]
+            for w in edges:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                    break
+                if w in on:
+                    low[v] = min(low[v], index[w])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[v])
+                if low[v] == index[v]:
+                    comp = []
+                    while True:
+                        w = stack.pop()
+                        on.discard(w)
+                        comp.append(w)
+                        if w == v:
+                            break
+                    if len(comp) > 1:
+                        found.append(sorted(comp))
+    return found
+
+
+def test_no_import_cycle_in_rsvo_env():
+    assert cycles(import_graph()) == []
+
+
+def test_the_cycle_finder_finds_cycles(tmp_path):
+    """It sees a cycle through a function-level import, a TYPE_CHECKING one, a relative one
+    and one through a package's __init__."""
+    pkg = tmp_path / "rsvo_env"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "a.py").write_text("def f():\n    from rsvo_env import b\n")
+    (pkg / "b.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import rsvo_env.a\n"
+    )
+    (pkg / "sub" / "__init__.py").write_text("from rsvo_env.sub.c import X\n")
+    (pkg / "sub" / "c.py").write_text("from .d import Y\nX = 1\n")
+    (pkg / "sub" / "d.py").write_text("from rsvo_env.sub import X\nY = 2\n")
+    found = cycles(import_graph(pkg))
+    assert ["rsvo_env.a", "rsvo_env.b"] in found
+    assert ["rsvo_env.sub", "rsvo_env.sub.c", "rsvo_env.sub.d"] in found
+
+
+def test_import_linter_contracts_are_kept():
+    """The layers of pyproject.toml's [tool.importlinter], checked by import-linter itself."""
+    lint = shutil.which("lint-imports") or str(Path(sys.executable).parent / "lint-imports")
+    if not Path(lint).exists():
+        pytest.fail("import-linter is not installed (it is in the dev extra)")
+    out = subprocess.run([lint, "--no-cache"], cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
+    assert "0 broken" in out.stdout and "KEPT" in out.stdout
+
+
+def test_at_most_eight_modules_over_30_lines_at_the_top():
+    """The subpackages carry the code; the top level holds the package's face and one-line
+    re-exports of the paths README and docs show."""
+    big = [p.name for p in PACKAGE.glob("*.py") if len(p.read_text().splitlines()) > 30]
+    assert len(big) <= 8, big
+
+
+@pytest.mark.parametrize("old, new", [
+    ("rsvo_env.safety", "rsvo_env.filter.safety"),
+    ("rsvo_env.vector", "rsvo_env.envs.vector"),
+    ("rsvo_env.nominal", "rsvo_env.control.nominal"),
+    ("rsvo_env.threads", "rsvo_env.util.threads"),
+])  # fmt: skip
+def test_the_paths_readme_and_docs_show_are_the_modules_themselves(old, new):
+    import importlib
+
+    assert importlib.import_module(old) is importlib.import_module(new)
