@@ -194,8 +194,8 @@ def test_culled_filter_equals_all_pairs():
         res = flt.filter(p, u, theta, velocities=v, radii=radii, u_max=a)
         if step % 6 == 0:
             w = flt.pair_weights(theta, None, Ia, Ja)
-            rows, _ = bb.backup_rows(p, v, w, Ia, Ja, flt.config.gamma, dt, radii,
-                                     -np.c_[a, a], np.c_[a, a], cull=False)  # fmt: skip
+            boxes = bb.AgentBoxes(radii, -np.c_[a, a], np.c_[a, a])
+            rows, _ = bb.backup_rows(p, v, w, Ia, Ja, flt.config.gamma, dt, boxes, cull=False)
             ua, fa = solvers.solve("exact", u, rows.flat_A, rows.flat_b, rows.offsets,
                                    -np.c_[a, a], np.c_[a, a])[:2]  # fmt: skip
             assert np.array_equal(fa, res.feasible)
@@ -282,8 +282,8 @@ def test_continuous_time_rows_admit_the_backup():
         for e in range(200):
             I, J = np.triu_indices(k, 1)
             w = np.c_[np.full(len(I), 0.3), np.full(len(I), 0.7)]
-            rows, _ = bb.backup_rows(p[e], v[e], w, I, J, 2.0, None, radii[e],
-                                     -np.c_[a[e], a[e]], np.c_[a[e], a[e]])  # fmt: skip
+            boxes = bb.AgentBoxes(radii[e], -np.c_[a[e], a[e]], np.c_[a[e], a[e]])
+            rows, _ = bb.backup_rows(p[e], v[e], w, I, J, 2.0, None, boxes)
             beta = bb.backup_action(v[e], a[e], None)
             lhs = (rows.flat_A * beta[rows.owner]).sum(-1)
             assert (lhs <= rows.flat_b + 1e-12 * (1 + np.abs(rows.flat_b))).all()

@@ -148,14 +148,10 @@ def all_pairs_double_integrator(flt, x, v, nominal, theta):
         w,
         I,
         J,
-        cfg.gamma,
-        cfg.safety_radius,
-        cfg.lo,
-        cfg.hi,
-        cfg.barrier,
-        cfg.split,
-        cfg.gamma2,
-        cfg.dt,
+        barriers.BarrierSpec(
+            cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, cfg.barrier, cfg.split, cfg.gamma2,
+            cfg.dt,
+        ),
     )
     return exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)
 
@@ -248,7 +244,8 @@ def test_culled_equals_all_pairs_in_any_units(seed, scale, kind, weighting):
         rows = barriers.single_integrator_rows(x, w, I, J, cfg.gamma, scale, cfg.lo, cfg.hi)
     else:
         rows = barriers.double_integrator_rows(
-            x, v, w, I, J, cfg.gamma, scale, cfg.lo, cfg.hi, cfg.barrier, dt=cfg.dt
+            x, v, w, I, J,
+            barriers.BarrierSpec(cfg.gamma, scale, cfg.lo, cfg.hi, cfg.barrier, dt=cfg.dt),
         )
     ref, feasible = exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)[:2]
     np.testing.assert_array_equal(res.feasible, feasible)

@@ -59,7 +59,7 @@ def test_split_shares_sum_to_rhs(seed, split, barrier, ti, tj):
     I, J = np.array([0]), np.array([1])
     w = SafetyFilter(FilterConfig()).pair_weights(np.array([ti, tj]), None, I, J)
     rows = barriers.double_integrator_rows(
-        p, v, w, I, J, gamma, DS, LO, HI, barrier=barrier, split=split, cull=False
+        p, v, w, I, J, barriers.BarrierSpec(gamma, DS, LO, HI, barrier, split), cull=False
     )
     rhs, exists = rhs_reference(p, v, barrier, gamma)
     if not exists:

@@ -144,3 +144,54 @@ def test_the_paths_readme_and_docs_show_are_the_modules_themselves(old, new):
     import importlib
 
     assert importlib.import_module(old) is importlib.import_module(new)
+
+
+def outside_dynamics() -> list[Path]:
+    return [p for p in PACKAGE.rglob("*.py") if "dynamics" not in p.relative_to(PACKAGE).parts]
+
+
+def test_no_branch_on_a_model_or_a_barrier_outside_dynamics():
+    """Nothing outside dynamics/ (where the barrier registry lives too) compares a model's or a
+    barrier's name or asks whether a model has headings: it asks the model."""
+    from rsvo_env.dynamics import MODELS
+    from rsvo_env.dynamics.barriers import BARRIERS
+
+    names = set(MODELS) | set(BARRIERS)
+    offenders = []
+    for path in outside_dynamics():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Attribute) and node.attr == "needs_headings":
+                offenders.append(f"{path.name}:{node.lineno} needs_headings")
+            if isinstance(node, ast.Compare):
+                constants = [
+                    c.value
+                    for operand in [node.left, *node.comparators]
+                    for c in ast.walk(operand)
+                    if isinstance(c, ast.Constant) and isinstance(c.value, str)
+                ]
+                if names & set(constants):
+                    offenders.append(f"{path.name}:{node.lineno} {ast.unparse(node)}")
+    assert not offenders, offenders
+
+
+def parameter_counts() -> tuple[list[str], list[str]]:
+    """Plain functions over 12 parameters, compiled kernels over 16 (self not counted)."""
+    plain, kernels = [], []
+    for path in PACKAGE.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            a = node.args
+            n = len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs)
+            n += (a.vararg is not None) + (a.kwarg is not None)
+            n -= bool(a.args) and a.args[0].arg in ("self", "cls")
+            compiled = any("jit" in ast.unparse(d) for d in node.decorator_list)
+            if n > (16 if compiled else 12):
+                (kernels if compiled else plain).append(f"{path.name}:{node.name} ({n})")
+    return plain, kernels
+
+
+def test_no_plain_function_over_12_parameters_and_few_wide_kernels():
+    plain, kernels = parameter_counts()
+    assert plain == []
+    assert len(kernels) <= 3, kernels

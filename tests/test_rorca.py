@@ -116,9 +116,10 @@ def test_an_agent_parked_on_its_goal_steps_aside_before_it_is_pushed(theta):
     pref = np.array([[[0.0, 0.0], [-2.0, 0.0]]])
 
     def velocities(parked):
+        rules = rorca.Rules(parked=np.array([[parked, False]]))
         return rorca.rorca_velocities(x, np.zeros_like(x), pref, np.full(2, 0.5),
                                       np.array([theta]), ["asymmetric"], 2.0, 0.05,
-                                      parked=np.array([[parked, False]]))[0]  # fmt: skip
+                                      rules=rules)[0]  # fmt: skip
 
     assert np.allclose(velocities(False)[0], 0.0)
     assert np.linalg.norm(velocities(True)[0]) > 0.1

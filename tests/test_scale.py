@@ -101,7 +101,9 @@ def test_double_integrator_crowd_flags_every_infeasible_step():
         nominal = np.clip(2.0 * (move_to_goal(p, goals, 2.0, 2.0) - v), -a_max, a_max)
         res = flt.filter(p, nominal, theta, velocities=v)
         rows = barriers.double_integrator_rows(
-            p, v, w, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, dt=dt, cull=False
+            p, v, w, I, J,
+            barriers.BarrierSpec(cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, dt=dt),
+            cull=False,
         )
         ref, feasible = exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)[:2]
         np.testing.assert_array_equal(res.feasible, feasible)

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from rsvo_env.cli.studies import PAPER, Plan, defaults
+from rsvo_env.cli.studies.ramp_merge import SPLITS
 from rsvo_env.cli.studies.who_benefits import MEASURES
 
 README_START, README_END = "<!-- results:start -->", "<!-- results:end -->"
@@ -266,8 +267,7 @@ def readme_block(ps: dict, rm: dict, cg: dict, diff: list[str], rel: Path | str)
         [
             [f"{split} split", f"{a['egoist_first']} / {a['unequal']}", a["unsafe"],
              a["infeasible"]]
-            for (split, barrier), a in rm["summary"].items()
-            if barrier == "braking"
+            for split, a in ((s, rm["summary"][(s, "braking")]) for s in SPLITS)
         ],
     )  # fmt: skip
     return [

@@ -18,6 +18,8 @@ filter on top keeps the guarantee whatever this controller proposes.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
@@ -126,6 +128,15 @@ def arrival_capped(
     return preferred * scale[:, None]
 
 
+class Rules(NamedTuple):
+    """The state R-ORCA's rules read beyond the crowd's motion: ``parked`` (E, N) agents at
+    their goals, ``goals`` (E, N, 2), ``held`` (E, N) agents held short of them."""
+
+    parked: NDArray | None = None
+    goals: NDArray | None = None
+    held: NDArray | None = None
+
+
 def rorca_velocities(
     positions: NDArray,
     velocities: NDArray,
@@ -138,9 +149,7 @@ def rorca_velocities(
     tau: float = 2.0,
     neighbor_dist: float | None = None,
     max_neighbors: int | None = 10,
-    parked: NDArray | None = None,
-    goals: NDArray | None = None,
-    held: NDArray | None = None,
+    rules: Rules | None = None,
 ) -> NDArray[np.float64]:
     """Eq. ``rorca``: each agent's velocity (E, N, 2) closest to ``preferred`` within its R-ORCA
     half-planes against the nearest ``max_neighbors`` (None: all) of the neighbours within
@@ -151,7 +160,8 @@ def rorca_velocities(
     of the avoidance and none of the slack from agents en route, read at their preferred
     velocities; ``goals`` (E, N, 2): near its goal, where its look-ahead reaches a neighbour, an
     agent's preferred speed is capped (:func:`arrival_capped`), only the agents ``held`` (E, N)
-    if given."""
+    if given; these three are ``rules`` (:class:`Rules`, None: none of them)."""
+    parked, goals, held = (None, None, None) if rules is None else rules
     E, n = positions.shape[:2]
     radii = np.broadcast_to(radii, (E, n))
     if neighbor_dist is None:

@@ -27,6 +27,7 @@ the stopping reach over the agent's trust box ``|a - beta_i|_inf <= rho_i``, the
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -138,6 +139,14 @@ def _directed(t: AgentTerms, owner: NDArray, e: NDArray, sigma: NDArray, dt: flo
     return A, sigma + toward * t.travel[owner] + t.spare[owner]
 
 
+class AgentBoxes(NamedTuple):
+    """Each agent's body radius (M,) and input box ``lo``, ``hi`` (M, 2)."""
+
+    radii: NDArray
+    lo: NDArray
+    hi: NDArray
+
+
 def backup_rows(
     positions: NDArray,
     velocities: NDArray,
@@ -146,9 +155,7 @@ def backup_rows(
     J: NDArray,
     gamma: float,
     dt: float | None,
-    radii: NDArray,
-    lo: NDArray,
-    hi: NDArray,
+    bodies: AgentBoxes,
     capsules: NDArray | None = None,
     n: int = 0,
     cull: bool = True,
@@ -156,8 +163,10 @@ def backup_rows(
     """Every agent's rows of the backup barrier (module docstring) against the pairs (I, J)
     (weights (P, 2)) and the obstacles ``capsules`` ((E, O, 5) or (1, O, 5), ``n`` agents an
     env), stored by agent: pair rows, obstacle rows, then the four rows of its trust box (the
-    agent itself their neighbour). ``radii`` (M,), ``lo``, ``hi`` (M, 2): each agent's body and
-    box. Returns the rows and each agent's smallest obstacle h (None without obstacles)."""
+    agent itself their neighbour). ``bodies``: each agent's body radius (M,) and box ``lo``,
+    ``hi`` (M, 2) (:class:`AgentBoxes`, or the filter's ``Bodies``). Returns the rows and each
+    agent's smallest obstacle h (None without obstacles)."""
+    radii, lo, hi = bodies.radii, bodies.lo, bodies.hi
     M = len(positions)
     t = agent_terms(velocities, lo, hi, dt)
     d = positions[I] - positions[J]

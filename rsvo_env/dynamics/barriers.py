@@ -15,13 +15,14 @@ E * N agents: agent ``e * N + i`` is agent i of env e, and pairs never cross env
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env.dynamics.sampled import sampled_braking_rhs
-from rsvo_env.qp.rows import Rows, finish, support
+from rsvo_env.qp.rows import PairFlags, Rows, finish, support
 
 __all__ = ["Rows", "support"]
 
@@ -137,7 +138,7 @@ def single_integrator_rows(
         body_radii(safety_radius, n),
     )
     none = np.zeros(len(I), dtype=bool)
-    return finish(n, I, J, A_i, b_i, b_j, h, lo, hi, ~none, none, none, cull)
+    return finish(n, I, J, A_i, b_i, b_j, h, lo, hi, PairFlags(~none, none, none), cull)
 
 
 def body_radii(safety_radius: float | NDArray, n: int) -> NDArray[np.float64]:
@@ -204,24 +205,34 @@ def _tangential_rows(
     return -dist[k, None] * e_t, w[k] * rhs_t, (1.0 - w[k]) * rhs_t
 
 
+class BarrierSpec(NamedTuple):
+    """A double-integrator pair barrier's settings: its gain ``gamma`` (Eq. (6); ``gamma2`` the
+    HOCBF's second, None: ``gamma``), the safe distance ``safety_radius``, one box ``lo``,
+    ``hi`` (2,) or one per agent (n, 2), the barrier, the split, and ``dt`` (None: continuous
+    time)."""
+
+    gamma: float
+    safety_radius: float
+    lo: NDArray
+    hi: NDArray
+    barrier: str = "braking"
+    split: str = "capability"
+    gamma2: float | None = None
+    dt: float | None = None
+
+
 def double_integrator_rows(
     positions: NDArray,
     velocities: NDArray,
     omega_pairs: NDArray,
     I: NDArray,
     J: NDArray,
-    gamma: float,
-    safety_radius: float,
-    lo: NDArray,
-    hi: NDArray,
-    barrier: str = "braking",
-    split: str = "capability",
-    gamma2: float | None = None,
-    dt: float | None = None,
+    spec: BarrierSpec,
     cull: bool = True,
     radii: NDArray | None = None,
 ) -> Rows:
-    """Rows for the double integrator (``docs/double_integrator.md``).
+    """Rows for the double integrator (``docs/double_integrator.md``) under ``spec``
+    (:class:`BarrierSpec`).
 
     ``lo``, ``hi``: one box (2,) or one per agent (n, 2); ``radii`` (n,): body radii, a pair
     safe at ``Ds = r_i + r_j`` (None: ``safety_radius`` for every pair). With boxes of their
@@ -232,11 +243,10 @@ def double_integrator_rows(
     ``RHS = (|dv|^2 - q^2) - A |dp| + gamma h A |dp| / (-q)``. While opening there is no row,
     unless ``dt`` is given: then the one-step row
     ``RHS = (|dv|^2 - q^2) + 2 |dp| (q + gamma (|dp| - Ds)) / dt``, and for every pair the
-    sampled-data bound :func:`rsvo_env.dynamics.sampled.sampled_braking_rhs` (``h+ >= (1 - gamma
-    dt) h``
-    at the next sample), the smallest RHS of the three; where that bound's reversal term puts
-    it beyond the box, the pair also gets a row keeping its tangential relative speed from
-    changing sign within the step (``-e_t.(a_i - a_j) <= w_t / dt``).
+    sampled-data bound :func:`rsvo_env.dynamics.sampled.sampled_braking_rhs`
+    (``h+ >= (1 - gamma dt) h`` at the next sample), the smallest RHS of the three; where that
+    bound's reversal term puts it beyond the box, the pair also gets a row keeping its tangential
+    relative speed from changing sign within the step (``-e_t.(a_i - a_j) <= w_t / dt``).
     ``barrier="hocbf"``: ``h = |dp|^2 - Ds^2``, ``c = 2``,
     ``RHS = 2 |dv|^2 + 2 (g1 + g2) dp.dv + g1 g2 h``.
     Splits of RHS into ``s_ij + s_ji``: ``paper`` (``omega RHS``), ``sign_aware`` (``omega RHS``
@@ -244,6 +254,7 @@ def double_integrator_rows(
     ``[-cap_i, RHS + cap_j]`` with ``cap`` the most evasive push the box allows along dp; when
     ``RHS < -(cap_i + cap_j)`` the pair is unrecoverable and each takes ``RHS / 2``).
     """
+    gamma, safety_radius, lo, hi, barrier, split, gamma2, dt = spec
     if barrier not in ("braking", "hocbf"):
         raise ValueError(
             f"barrier {barrier!r} has no pair rows here; use 'braking' or 'hocbf' "
@@ -318,7 +329,8 @@ def double_integrator_rows(
         h = np.where(bad, -Ds, h)
         exists = exists | bad
     if len(keep_sign) == 0:
-        return finish(n, I, J, A_i, s_i, s_j, h, lo, hi, exists, unrecoverable, capped, cull)
+        flags = PairFlags(exists, unrecoverable, capped)
+        return finish(n, I, J, A_i, s_i, s_j, h, lo, hi, flags, cull)
     k, (A_t, s_ti, s_tj) = keep_sign, tangential
     P = len(I)
     rows = finish(
@@ -331,9 +343,11 @@ def double_integrator_rows(
         np.concatenate([h, h[k]]),
         lo,
         hi,
-        np.concatenate([exists, np.ones(len(k), dtype=bool)]),
-        np.concatenate([unrecoverable, np.zeros(len(k), dtype=bool)]),
-        np.concatenate([capped, np.zeros(len(k), dtype=bool)]),
+        PairFlags(
+            np.concatenate([exists, np.ones(len(k), dtype=bool)]),
+            np.concatenate([unrecoverable, np.zeros(len(k), dtype=bool)]),
+            np.concatenate([capped, np.zeros(len(k), dtype=bool)]),
+        ),
         cull,
     )
     return replace(rows, pair_h=h, n_pairs=P)

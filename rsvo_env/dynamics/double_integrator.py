@@ -89,9 +89,8 @@ class DoubleIntegrator(Dynamics):
         from rsvo_env.dynamics.backup_barrier import backup_rows
 
         return backup_rows(
-            positions, velocities, weights, I, J, cfg.gamma, cfg.dt, bodies.radii, bodies.lo,
-            bodies.hi, capsules, n,
-        )  # fmt: skip
+            positions, velocities, weights, I, J, cfg.gamma, cfg.dt, bodies, capsules, n
+        )
 
     def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:
         from rsvo_env.dynamics import barriers
@@ -107,10 +106,12 @@ class DoubleIntegrator(Dynamics):
             lo, hi, radii = bodies.lo, bodies.hi, bodies.radii
             if cfg.dt is not None and cfg.barrier == "braking":
                 check_sampled_pairs(cfg.dt, bodies, I, J)
+        spec = barriers.BarrierSpec(
+            cfg.gamma, cfg.safety_radius, lo, hi, cfg.barrier, cfg.split, cfg.gamma2, cfg.dt
+        )
         return barriers.double_integrator_rows(
-            positions, velocities, weights, I, J, cfg.gamma, cfg.safety_radius, lo, hi,
-            barrier=cfg.barrier, split=cfg.split, gamma2=cfg.gamma2, dt=cfg.dt, radii=radii,
-        )  # fmt: skip
+            positions, velocities, weights, I, J, spec, radii=radii
+        )
 
     def obstacle_rows(self, cfg, positions, velocities, bodies, capsules, n):
         from rsvo_env.dynamics.double_integrator_obstacles import double_integrator_obstacle_rows
@@ -136,7 +137,7 @@ class DoubleIntegrator(Dynamics):
         return double_integrator_obstacle_rows(cfg, positions, velocities, bodies, capsules, n)
 
     def culling_radii(self, cfg, omega_floor, velocities, bodies):
-        from rsvo_env.geometry import pairs
+        from rsvo_env.dynamics.double_integrator_radii import WorstPair, double_integrator_radii
 
         if cfg.barrier == "backup":
             from rsvo_env.dynamics.backup_barrier import backup_radii
@@ -148,7 +149,7 @@ class DoubleIntegrator(Dynamics):
                 bodies.speed.reshape(E, n),
             )  # fmt: skip
         if bodies.uniform:
-            return pairs.double_integrator_radii(
+            return double_integrator_radii(
                 omega_floor, velocities, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi,
                 cfg.barrier, cfg.gamma2, cfg.dt,
             )  # fmt: skip
@@ -157,10 +158,13 @@ class DoubleIntegrator(Dynamics):
         from rsvo_env.dynamics.barriers import braking_capability
 
         a = braking_capability(bodies.lo, bodies.hi)
-        return pairs.double_integrator_radii(
-            omega_floor, velocities, cfg.gamma, 2.0 * float(bodies.radii.max()), cfg.lo, cfg.hi,
-            cfg.barrier, cfg.gamma2, cfg.dt, A=2.0 * float(a.min()), U=float(bodies.speed.max()),
+        worst = WorstPair(
+            A=2.0 * float(a.min()), U=float(bodies.speed.max()),
             Ds_min=2.0 * float(bodies.radii.min()), a_top=float(a.max()),
+        )  # fmt: skip
+        return double_integrator_radii(
+            omega_floor, velocities, cfg.gamma, 2.0 * float(bodies.radii.max()), cfg.lo, cfg.hi,
+            cfg.barrier, cfg.gamma2, cfg.dt, worst,
         )  # fmt: skip
 
     def reach(self, params: dict[str, Any], limit: float, horizon: float) -> tuple[float, float]:

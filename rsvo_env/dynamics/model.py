@@ -10,6 +10,7 @@ A new model is one module with a subclass of :class:`Dynamics` plus one line in 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -43,8 +44,10 @@ class Dynamics:
     per_agent_limits: ClassVar[bool] = True
     # whether its input is its velocity (a scripted controller may steer it as such: R-ORCA)
     velocity_input: ClassVar[bool] = False
-    # whether its state has a heading the filter needs (``SafetyFilter.filter(headings=)``)
-    needs_headings: ClassVar[bool] = False
+    # the state it carries beyond positions and velocities, each (E, N) and named as the
+    # simulator's State and ``SafetyFilter.filter``'s keywords (the unicycle: "headings"): the
+    # core, the filter, the renderer and the global state pass them on by these names
+    state_fields: ClassVar[tuple[str, ...]] = ()
 
     def step(
         self, positions: NDArray, velocities: NDArray, u: NDArray, dt: float
@@ -71,40 +74,66 @@ class Dynamics:
         hi = np.repeat(np.asarray(u_max, dtype=np.float64).reshape(-1, 1), 2, axis=1)
         return -hi, hi
 
+    def advance_state(self, state: Any, u: NDArray, dt: float, params: dict[str, Any]) -> None:
+        """The simulator's step of ``state`` (the core's State: positions, velocities and the
+        model's :attr:`state_fields`) under the inputs ``u`` for ``dt``."""
+        state.positions, state.velocities = self.step(state.positions, state.velocities, u, dt)
+
+    def to_controls(
+        self, actions: NDArray, params: dict[str, Any], planar: Callable[[NDArray], NDArray]
+    ) -> NDArray:
+        """Normalised actions to the model's inputs: ``planar`` (the core's map of planar
+        actions: the norm clipped to 1, times the limit, out of the goal frame, the residual
+        added) unless the model's actions are of its own."""
+        return planar(actions)
+
+    def to_actions(
+        self, controls: NDArray, params: dict[str, Any], planar: Callable[[NDArray], NDArray]
+    ) -> NDArray:
+        """The inverse of :meth:`to_controls` (no clipping)."""
+        return planar(controls)
+
+    def filter_state(
+        self,
+        cfg: FilterSettings,
+        lead: tuple[int, ...],
+        n: int,
+        single: bool,
+        bodies: Bodies | None,
+        state: dict[str, Any],
+    ) -> tuple[Bodies | None, dict[str, NDArray]]:
+        """The model's own inputs to ``SafetyFilter.filter`` (``state``: its keywords named by
+        :attr:`state_fields`, and ``holonomic``), checked, each naming the field and the agent;
+        returns the bodies (changed where the model's inputs change them) and the arrays for
+        :meth:`lift`."""
+        if state.get("holonomic") is not None:
+            raise ValueError(f"holonomic is for the unicycle's mixed crowds, not the {self.name}")
+        return bodies, {}
+
     def lift(
         self,
         cfg: FilterSettings,
         positions: NDArray,
-        headings: NDArray,
         nominal: NDArray,
         bodies: Bodies,
-    ) -> tuple[NDArray, NDArray, Bodies, NDArray]:
-        """For a model whose QP lives in coordinates of its own (``needs_headings``): the
-        points the rows are built on, the nominal in the QP's coordinates, the bodies the rows
-        and culling use, and each agent's (cos, sin) that turns its rows into those
-        coordinates."""
-        raise NotImplementedError
+        **state: NDArray,
+    ) -> tuple[NDArray, NDArray, Bodies, NDArray | None]:
+        """The points the rows are built on, the nominal in the QP's coordinates, the bodies
+        the rows and culling use, and each agent's (cos, sin) that turns its rows into those
+        coordinates (None: the QP lives in the world's, as here)."""
+        return positions, nominal, bodies, None
 
-    def advance(
-        self,
-        positions: NDArray,
-        headings: NDArray,
-        u: NDArray,
-        dt: float,
-        params: dict[str, Any],
-    ) -> tuple[NDArray, NDArray, NDArray]:
-        """A model with headings (``needs_headings``): its simulator step, positions, headings
-        and velocities after ``dt``."""
-        raise NotImplementedError
+    def turn_rows(self, rows: Rows, rotation: NDArray | None) -> Rows:
+        """The rows in the QP's coordinates (:meth:`lift`'s rotation)."""
+        return rows
 
-    def controls(self, actions: NDArray, params: dict[str, Any]) -> NDArray:
-        """Normalised actions to the model's inputs, for a model with headings (the others:
-        the norm clipped to 1, times the limit, in the core)."""
-        raise NotImplementedError
+    def global_fields(self) -> tuple[tuple[str, float, float], ...]:
+        """The model's own columns of an agent's block in the global state: name, low, high."""
+        return ()
 
-    def actions(self, controls: NDArray, params: dict[str, Any]) -> NDArray:
-        """The inverse of :meth:`controls`."""
-        raise NotImplementedError
+    def global_values(self, state: Any, sel: Any) -> list[NDArray]:
+        """Those columns' values (E, N) for the envs ``sel`` of the core's State."""
+        return []
 
     def lower(self, cfg: FilterSettings, actions: NDArray, bodies: Bodies) -> NDArray:
         """The QP's solution back in the model's inputs (inverse of :meth:`lift`'s nominal)."""

@@ -13,14 +13,16 @@ in closed form, ``tan(psi / 2)`` decaying as ``exp(-|c| t / l)`` (``psi = theta 
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env.dynamics.model import Dynamics
 from rsvo_env.dynamics.single_integrator import SingleIntegrator
 from rsvo_env.geometry.bodies import Bodies
+from rsvo_env.util.validation import real_array
 
 if TYPE_CHECKING:
     from rsvo_env.util.settings import FilterSettings
@@ -61,7 +63,7 @@ class Unicycle(Dynamics):
 
     name = "unicycle"
     limit_name = "u_max"
-    needs_headings = True
+    state_fields = ("headings",)
     per_agent_bodies = True
 
     def check_box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> None:
@@ -101,7 +103,17 @@ class Unicycle(Dynamics):
         lo = np.stack([np.zeros_like(v_hi), np.full_like(v_hi, -b)], -1)
         return lo, np.stack([v_hi, np.full_like(v_hi, b)], -1)
 
-    def lift(self, cfg, positions, headings, nominal, bodies):
+    def filter_state(self, cfg, lead, n, single, bodies, state):
+        hd = check_headings(state.get("headings"), (*lead, n), self.name)
+        hd = hd[None] if single else hd
+        if state.get("holonomic") is not None:
+            mask = check_holonomic(state["holonomic"], (*lead, n)).reshape(-1)
+            if bodies is None:
+                bodies = Bodies.of(cfg, lead[0] if lead else 1, n)
+            bodies = bodies.with_holonomic(mask, float(np.max(cfg.u_max)), cfg.lookahead)
+        return bodies, {"headings": hd}
+
+    def lift(self, cfg, positions, nominal, bodies, headings):
         M = len(bodies.radii)
         l = np.full(M, float(cfg.lookahead)) if bodies.lookahead is None else bodies.lookahead
         e = heading_vectors(headings).reshape(M, 2)
@@ -129,6 +141,9 @@ class Unicycle(Dynamics):
         l = bodies.lookahead.reshape(actions.shape[:-1])
         return np.stack([actions[..., 0], actions[..., 1] / np.where(l > 0, l, 1.0)], -1)
 
+    def turn_rows(self, rows, rotation):
+        return replace(rows, flat_A=rotate_rows(rows.flat_A, rows.owner, rotation))
+
     # the rows, radii and obstacle rows are the single integrator's on the look-ahead point
     rows = SingleIntegrator.rows
     culling_radii = SingleIntegrator.culling_radii
@@ -145,6 +160,24 @@ class Unicycle(Dynamics):
         the step (what the observation reports)."""
         p, th = unicycle_step(positions, headings, u, float(params["lookahead"]), dt)
         return p, th, (p - positions) / dt
+
+    def advance_state(self, state, u, dt, params):
+        state.positions, state.headings, state.velocities = self.advance(
+            state.positions, state.headings, u, dt, params
+        )
+
+    def to_controls(self, actions, params, planar):
+        return self.controls(actions, params)  # its actions are (v, w), in its body frame
+
+    def to_actions(self, controls, params, planar):
+        return self.actions(controls, params)
+
+    def global_fields(self):
+        return (("heading", -np.pi, np.pi),)
+
+    def global_values(self, state, sel):
+        h = state.headings[sel]
+        return [np.arctan2(np.sin(h), np.cos(h))]
 
     def controls(self, actions: NDArray, params: dict[str, Any]) -> NDArray[np.float64]:
         """Normalised actions in [-1, 1]^2 to (v, w): ``(a_0 v_max, a_1 w_max)``, each
@@ -182,3 +215,27 @@ def rotate_rows(A: NDArray, owner: NDArray, rotation: NDArray) -> NDArray[np.flo
 
 
 __all__ = ["Bodies", "Unicycle", "heading_vectors", "rotate_rows", "unicycle_step"]
+
+
+def check_headings(headings: ArrayLike | None, shape: tuple[int, ...], model: str) -> NDArray:
+    """Finite headings (radians) of the given shape, required by ``model``."""
+    if headings is None:
+        raise ValueError(f"headings are required for the {model}")
+    hd = real_array(headings, "headings")
+    if hd.shape != shape:
+        raise ValueError(f"headings has shape {hd.shape}, expected {shape}")
+    if not np.isfinite(hd).all():
+        idx = tuple(int(k) for k in np.argwhere(~np.isfinite(hd))[0])
+        where = "".join(f"[{k}]" for k in idx)
+        raise ValueError(f"headings{where} = {float(hd[idx])!r} is not finite (agent {idx[-1]})")
+    return hd
+
+
+def check_holonomic(holonomic: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.bool_]:
+    """One bool per agent (True: a single integrator in a mixed crowd of unicycles)."""
+    arr = np.asarray(holonomic)
+    if arr.dtype != np.bool_:
+        raise ValueError(f"holonomic must be bools (True: a single integrator), got {arr.dtype}")
+    if arr.shape != shape:
+        raise ValueError(f"holonomic has shape {arr.shape}, expected {shape}")
+    return arr

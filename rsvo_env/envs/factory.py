@@ -7,7 +7,7 @@ from typing import Any
 
 from rsvo_env.filter.safety import FilterConfig
 from rsvo_env.scenarios import Scenario, make_scenario
-from rsvo_env.sim.core import Simulator
+from rsvo_env.sim.core import REWARDS, Simulator
 
 SIM_KEYWORDS = (
     "num_obs_neighbors",
@@ -57,10 +57,12 @@ def make_simulator(
             raise TypeError("give max_steps or its PettingZoo name max_cycles, not both")
         kwargs["max_steps"] = max_cycles
     sim_kwargs = {k: kwargs.pop(k) for k in SIM_KEYWORDS if k in kwargs}
+    rewards = {k: sim_kwargs.pop(k) for k in REWARDS if k in sim_kwargs}
     return Simulator(
         make_scenario(scenario, **kwargs),
         num_envs=num_envs,
         record_series=record_series,
+        rewards=rewards,
         **sim_kwargs,
     )
 

@@ -23,13 +23,11 @@ if TYPE_CHECKING:
     from rsvo_env.sim.core import Simulator
 
 AGENT_FIELDS = ("x", "y", "vx", "vy", "goal_x", "goal_y", "theta", "radius")
-HEADING_FIELD = "heading"
 
 
 def agent_fields(sim: Simulator) -> tuple[str, ...]:
     """The names of one agent's block of the state, in order."""
-    heading = (HEADING_FIELD,) if sim.scenario.model.needs_headings else ()
-    return AGENT_FIELDS + heading
+    return AGENT_FIELDS + tuple(name for name, _, _ in sim.scenario.model.global_fields())
 
 
 def space(sim: Simulator) -> gymnasium.spaces.Box:
@@ -40,8 +38,8 @@ def space(sim: Simulator) -> gymnasium.spaces.Box:
     r_max = float(np.max(sim.radii))
     lo = [-L.p, -L.p, -L.v, -L.v, -L.p, -L.p, 0.0, 0.0]
     hi = [L.p, L.p, L.v, L.v, L.p, L.p, L.theta_max, r_max]
-    if sim.scenario.model.needs_headings:
-        lo, hi = lo + [-np.pi], hi + [np.pi]
+    own = sim.scenario.model.global_fields()  # the model's columns (the unicycle's heading)
+    lo, hi = lo + [low for _, low, _ in own], hi + [high for _, _, high in own]
     num_obstacles = sim.scenario.num_obstacles
     far = max(L.p, *(np.abs(a).max() for a in sim.scenario.arena()))
     rho = float(sim.scenario.max_obstacle_radius)
@@ -63,9 +61,7 @@ def values(sim: Simulator, envs: NDArray[np.int64] | None = None) -> NDArray[np.
         s.theta[sel][..., None],
         np.broadcast_to(sim.radii, (E, n))[..., None],
     ]
-    if sim.scenario.model.needs_headings:
-        h = s.headings[sel]
-        columns.append(np.arctan2(np.sin(h), np.cos(h))[..., None])
+    columns += [c[..., None] for c in sim.scenario.model.global_values(s, sel)]
     agents = np.concatenate(columns, axis=-1).reshape(E, -1)
     obstacles = s.obstacles[sel].reshape(E, -1)
     return np.concatenate([agents, obstacles], axis=-1).astype(np.float32)

@@ -275,7 +275,7 @@ class RSVOParallelEnv(ParallelEnv):
             self.history,
             time=self.sim.metrics.steps[0] * self.sim.dt,
             obstacles=s.obstacles[0],
-            headings=s.headings[0] if self.scenario.model.needs_headings else None,
+            **{name: getattr(s, name)[0] for name in self.scenario.model.state_fields},
         )
         if self.render_mode == "rgb_array":
             return self.renderer.frame()

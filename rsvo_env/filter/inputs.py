@@ -1,16 +1,14 @@
 """The checks of :meth:`rsvo_env.filter.safety.SafetyFilter.filter` beyond positions and scores:
-per-agent bodies, obstacles and headings. Each raises ``ValueError`` naming the field, the
-agent and the value."""
+per-agent bodies and obstacles (a model's own inputs, such as headings, its model checks).
+Each raises ``ValueError`` naming the field, the agent and the value."""
 
 from __future__ import annotations
 
-import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env.filter.config import FilterConfig
 from rsvo_env.geometry.bodies import Bodies, check_per_agent
 from rsvo_env.geometry.obstacles import Obstacles
-from rsvo_env.util.validation import real_array
 
 
 def check_bodies(
@@ -58,27 +56,3 @@ def check_obstacles(obstacles: Obstacles | None, lead: tuple[int, ...]) -> NDArr
             f"or one an env ({lead[0] if lead else 1}, O, 5)"
         )
     return caps
-
-
-def check_headings(headings: ArrayLike | None, shape: tuple[int, ...], model: str) -> NDArray:
-    """Finite headings (radians) of the given shape, required by ``model``."""
-    if headings is None:
-        raise ValueError(f"headings are required for the {model}")
-    hd = real_array(headings, "headings")
-    if hd.shape != shape:
-        raise ValueError(f"headings has shape {hd.shape}, expected {shape}")
-    if not np.isfinite(hd).all():
-        idx = tuple(int(k) for k in np.argwhere(~np.isfinite(hd))[0])
-        where = "".join(f"[{k}]" for k in idx)
-        raise ValueError(f"headings{where} = {float(hd[idx])!r} is not finite (agent {idx[-1]})")
-    return hd
-
-
-def check_holonomic(holonomic: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.bool_]:
-    """One bool per agent (True: a single integrator in a mixed crowd of unicycles)."""
-    arr = np.asarray(holonomic)
-    if arr.dtype != np.bool_:
-        raise ValueError(f"holonomic must be bools (True: a single integrator), got {arr.dtype}")
-    if arr.shape != shape:
-        raise ValueError(f"holonomic has shape {arr.shape}, expected {shape}")
-    return arr

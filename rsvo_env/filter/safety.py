@@ -12,21 +12,17 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rsvo_env.dynamics.unicycle import rotate_rows
 from rsvo_env.filter import dense as dense_solver
 from rsvo_env.filter import projection_disk
 from rsvo_env.filter import statistics as scene_barrier
 from rsvo_env.filter.config import FilterConfig
 from rsvo_env.filter.inputs import (
     check_bodies,
-    check_headings,
-    check_holonomic,
     check_obstacles,
 )
 from rsvo_env.filter.result import FilterResult, per_env
@@ -43,6 +39,16 @@ from rsvo_env.responsibility.svo import (
 from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
 from rsvo_env.util.planar import norm
 from rsvo_env.util.validation import check_theta, check_vectors, real_array
+
+
+class Known(NamedTuple):
+    """What a caller of :meth:`SafetyFilter.apply` already knows of its scenes: each scene's
+    smallest weight ``omega_min`` (E,), each agent's nearest distance ``nearest`` (E, N), and
+    ``floor``, :func:`pairs.weight_floor` of the weights."""
+
+    omega_min: NDArray[np.float64] | None = None
+    nearest: NDArray[np.float64] | None = None
+    floor: pairs.Floor | None = None
 
 
 class SafetyFilter:
@@ -178,20 +184,9 @@ class SafetyFilter:
                 raise ValueError(f"velocities are required for the {cfg.dynamics}")
             vel = check_vectors(velocities, "velocities", n, lead=lead)
         caps = check_obstacles(obstacles, lead)
-        hd = None
-        if cfg.model.needs_headings:
-            hd = check_headings(headings, (*lead, n), cfg.dynamics)
-            hd = hd[None] if single else hd
-            if holonomic is not None:
-                mask = check_holonomic(holonomic, (*lead, n)).reshape(-1)
-                if bodies is None:
-                    bodies = Bodies.of(cfg, lead[0] if lead else 1, n)
-                bodies = bodies.with_holonomic(mask, float(np.max(cfg.u_max)), cfg.lookahead)
-        elif holonomic is not None:
-            raise ValueError(
-                f"holonomic is for the unicycle's mixed crowds, not the {cfg.dynamics}"
-            )
-        kw = {"bodies": bodies, "obstacles": caps, "headings": hd}
+        own = {"headings": headings, "holonomic": holonomic}
+        bodies, own = cfg.model.filter_state(cfg, lead, n, single, bodies, own)
+        kw = {"bodies": bodies, "obstacles": caps, **own}
         if single:
             pos, nom, th = pos[None], nom[None], th[None]
             vel = None if vel is None else vel[None]
@@ -209,9 +204,7 @@ class SafetyFilter:
         velocities: NDArray[np.float64] | None = None,
         omega: NDArray[np.float64] | None = None,
         with_rows: bool = False,
-        omega_min: NDArray[np.float64] | None = None,
-        nearest: NDArray[np.float64] | None = None,
-        floor: pairs.Floor | None = None,
+        known: Known | None = None,
         weighting: Sequence[str] | None = None,
         bodies: Bodies | None = None,
         obstacles: NDArray | None = None,
@@ -220,19 +213,18 @@ class SafetyFilter:
         """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
 
         One call of the row builder and one of the solver serve all E x N agents. Dense
-        single-integrator scenes with the exact solver take one compiled pass
-        (``solvers.dense``, the same arithmetic) unless ``with_rows`` asks for the rows. A caller
-        that keeps them passes each scene's smallest weight ``omega_min`` (E,), each agent's
-        nearest distance ``nearest`` (E, N) and ``floor``, :func:`pairs.weight_floor` of the
-        weights, which the large-N path needs. There, each agent examines its neighbours within
-        its own radius (:func:`pairs.agent_radii`, :func:`pairs.double_integrator_radii` from
-        the current velocities): exact culling, so the rows kept, and the solution, are those
-        of all pairs. ``bodies``: each agent's radius and box (None: the config's);
-        ``obstacles``: capsules (O, 5) or (E, O, 5)
+        single-integrator scenes with the exact solver take one compiled pass (``solvers.dense``,
+        the same arithmetic) unless ``with_rows`` asks for the rows. A caller that keeps them passes
+        them as ``known`` (:class:`Known`), which the large-N path needs. There, each agent examines
+        its neighbours within its own radius (:func:`pairs.agent_radii`, or the model's
+        ``culling_radii`` from the current velocities): exact culling, so the rows kept, and the
+        solution, are those of all pairs. ``bodies``: each agent's radius and box (None: the
+        config's); ``obstacles``: capsules (O, 5) or (E, O, 5)
         (:class:`rsvo_env.geometry.obstacles.Obstacles`);
-        ``headings`` (E, N): for a model that needs them (the unicycle).
+        the model's own state (its ``state_fields``: the unicycle's ``headings`` (E, N)).
         """
         cfg = self.config
+        omega_min, nearest, floor = Known() if known is None else known
         E, n = theta.shape
         if bodies is None:  # the config's, kept: a simulator calls with the same shape
             bodies = self._default_bodies.get((E, n))
@@ -246,12 +238,12 @@ class SafetyFilter:
             if n <= dense_solver.MAX_AGENTS:  # the compiled all-pairs pass
                 omega = self._matrix(theta, weighting) if omega is None else omega
                 return self._apply_dense(positions, nominal, omega, bodies)
-        solve_nominal, solve_box, rotation = nominal, bodies, None
-        if cfg.model.needs_headings:
-            # the rows live on points of the model's own (the unicycle's look-ahead points)
-            positions, solve_nominal, bodies, rotation = cfg.model.lift(
-                cfg, positions, headings, nominal, bodies
-            )
+        solve_box = bodies
+        own = {} if headings is None else {"headings": headings}
+        positions, solve_nominal, bodies, rotation = cfg.model.lift(
+            cfg, positions, nominal, bodies, **own
+        )
+        if rotation is not None:  # the rows live on points of the model's own (look-ahead)
             nearest = None
         pos = positions.reshape(E * n, 2)
         vel = None if velocities is None else velocities.reshape(E * n, 2)
@@ -260,9 +252,7 @@ class SafetyFilter:
         def rows_of(I: NDArray, J: NDArray) -> tuple[Any, Any]:
             weights = self.pair_weights(theta, omega, I, J, weighting)
             rows, obstacle_h = cfg.model.filter_rows(cfg, pos, vel, weights, I, J, bodies, caps, n)
-            if rotation is not None:
-                rows = replace(rows, flat_A=rotate_rows(rows.flat_A, rows.owner, rotation))
-            return rows, obstacle_h
+            return cfg.model.turn_rows(rows, rotation), obstacle_h
 
         reach, rows = None, None
         if dense:

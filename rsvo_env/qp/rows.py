@@ -7,6 +7,7 @@ costs 10,000 rows, not 10,000 x 10,000 padded slots.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -129,6 +130,15 @@ def pack(n, I, J, A_i, b_i, b_j, h, exists, unrec, capped, lo, hi, cull):
     return A, b, offsets, nb, hh, un, cp
 
 
+class PairFlags(NamedTuple):
+    """Per pair (P,): whether it has rows, whether it is unrecoverable (each agent takes half
+    of the budget), whether its share was capped to what the agent can do."""
+
+    exists: NDArray
+    unrecoverable: NDArray
+    capped: NDArray
+
+
 def finish(
     n: int,
     I: NDArray,
@@ -139,17 +149,17 @@ def finish(
     h: NDArray,
     lo: NDArray,
     hi: NDArray,
-    exists: NDArray,
-    unrecoverable: NDArray,
-    capped: NDArray,
+    flags: PairFlags,
     cull: bool = True,
 ) -> Rows:
-    """Both agents' rows of each pair, exact culling, storage by agent.
+    """Both agents' rows of each pair, exact culling, storage by agent (``flags``: which pairs
+    have rows, and which of those are unrecoverable or capped).
 
     Culling (``docs/math.md``): a row whose right side is at least the largest value its left
     side takes over its agent's box cannot bind anywhere in that box, so dropping it changes no
     solution. ``lo``, ``hi``: one box (2,) or one per agent (n, 2).
     """
+    exists, unrecoverable, capped = flags
     lo, hi = (np.ascontiguousarray(np.broadcast_to(x, (n, 2)), dtype=np.float64) for x in (lo, hi))
     A, b, offsets, nb, hh, un, cp = pack(
         n, I, J, np.ascontiguousarray(A_i), b_i, b_j, h, exists, unrecoverable, capped, lo, hi,

@@ -266,8 +266,10 @@ class Scenario:
         return rorca.rorca_velocities(
             state.positions, state.velocities, preferred, p["rorca_pad"] * self.radii,
             state.theta, state.weighting, self.u_max, p["dt"], p["rorca_tau"],
-            parked=state.at_goal, goals=state.goals,
-            held=stall.held(state.no_progress, p["dt"], rorca.HOLD_SECONDS),
+            rules=rorca.Rules(
+                parked=state.at_goal, goals=state.goals,
+                held=stall.held(state.no_progress, p["dt"], rorca.HOLD_SECONDS),
+            ),
         )  # fmt: skip
 
     def move_to_goal(self, state: Any, right_hand: bool, speed: float) -> NDArray[np.float64]:

@@ -25,7 +25,7 @@ from rsvo_env.control.residual import Residual
 from rsvo_env.control.stall import StallClock, deadlock_steps, goal_distance
 from rsvo_env.control.theta_action import theta_action_of
 from rsvo_env.filter.result import FilterResult, merge_stats
-from rsvo_env.filter.safety import FilterConfig, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, Known, SafetyFilter
 from rsvo_env.geometry.bodies import Bodies
 from rsvo_env.geometry.pairs import Floor
 from rsvo_env.responsibility.svo import Weighting, check_weighting
@@ -40,17 +40,21 @@ from rsvo_env.util import planar
 from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
 from rsvo_env.util.validation import check_count, check_real
 
+# the reward's weights (``rewards=``): progress toward the goal, the time cost, the goal bonus,
+# and the share of each agent's reward replaced by its env's mean
+REWARDS = {"reward_progress": 1.0, "reward_time": 0.01, "reward_goal": 10.0, "reward_team": 0.0}
+
 
 class Simulator:
     """State arrays (E, N, ...), per-env generators and per-env reset, and the step above.
 
-    ``weighting``: every episode's default (a reset option overrides it once); ``reward_*``
-    weigh the reward terms (``reward_team``: the share of each agent's reward replaced by
-    its env's mean); ``stall_clock``: observe each agent's
-    :class:`rsvo_env.control.stall.StallClock`, in units of that many steps (None: not
-    observed); ``record_series`` (E = 1) keeps the series the paper plots; ``theta_action``:
-    each action gets a third component, the agent's theta for the step, on
-    ``theta_action_range`` (:mod:`rsvo_env.control.theta_action`)."""
+    ``weighting``: every episode's default (a reset option overrides it once); ``rewards``
+    (:data:`REWARDS`, each ``reward_*`` keyword) weigh the reward terms (``reward_team``: the share
+    of each agent's reward replaced by its env's mean); ``stall_clock``: observe each agent's
+    :class:`rsvo_env.control.stall.StallClock`, in units of that many steps (None: not observed);
+    ``record_series`` (E = 1) keeps the series the paper plots; ``theta_action``: each action gets a
+    third component, the agent's theta for the step, on ``theta_action_range``
+    (:mod:`rsvo_env.control.theta_action`)."""
 
     def __init__(
         self,
@@ -59,10 +63,7 @@ class Simulator:
         num_obs_neighbors: int | None = None,
         frame: str = "world",
         weighting: Weighting = "asymmetric",
-        reward_progress: float = 1.0,
-        reward_time: float = 0.01,
-        reward_goal: float = 10.0,
-        reward_team: float = 0.0,
+        rewards: dict[str, Any] | None = None,
         stall_clock: int | None = None,
         record_series: bool = False,
         theta_action: bool = False,
@@ -84,17 +85,13 @@ class Simulator:
         self.scenario, self.num_envs, self.n = scenario, int(num_envs), n
         self.k = int(num_obs_neighbors)
         self.frame, self.weighting = frame, weighting
+        r = {**REWARDS, **(rewards or {})}
         self.reward_weights = tuple(
-            check_real(v, name)
-            for v, name in (
-                (reward_progress, "reward_progress"),
-                (reward_time, "reward_time"),
-                (reward_goal, "reward_goal"),
-            )
+            check_real(r[name], name) for name in ("reward_progress", "reward_time", "reward_goal")
         )
-        self.reward_team = check_real(reward_team, "reward_team")
+        self.reward_team = check_real(r["reward_team"], "reward_team")
         if not 0.0 <= self.reward_team <= 1.0:
-            raise ValueError(f"reward_team = {reward_team!r} must be in [0, 1]")
+            raise ValueError(f"reward_team = {r['reward_team']!r} must be in [0, 1]")
         p = scenario.params
         self.dt, self.max_steps, self.u_max = float(p["dt"]), int(p["max_steps"]), scenario.u_max
         self.safety_radius = float(p["safety_radius"])
@@ -232,9 +229,10 @@ class Simulator:
     def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by
         u_max, rotate out of the goal frame; with residual actions, add them to the scripted
-        command (see :meth:`set_residual`)."""
-        if self.scenario.model.needs_headings:  # its actions are (v, w), in its body frame
-            return self.scenario.model.controls(actions, self.scenario.params)
+        command (see :meth:`set_residual`)), or the model's own map of its actions."""
+        return self.scenario.model.to_controls(actions, self.scenario.params, self._planar_controls)
+
+    def _planar_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         limits = self.scenario.agent_limits
         if limits is None:
             u = planar.clip_norm(actions, 1.0, self.u_max)
@@ -248,8 +246,9 @@ class Simulator:
 
     def to_actions(self, controls: NDArray[np.float64]) -> NDArray[np.float64]:
         """Physical controls to the normalised action frame (no clipping)."""
-        if self.scenario.model.needs_headings:
-            return self.scenario.model.actions(controls, self.scenario.params)
+        return self.scenario.model.to_actions(controls, self.scenario.params, self._planar_actions)
+
+    def _planar_actions(self, controls: NDArray[np.float64]) -> NDArray[np.float64]:
         limits = self.scenario.agent_limits
         u = controls / (self.u_max if limits is None else limits[:, None])
         if self.frame == "goal":
@@ -311,13 +310,11 @@ class Simulator:
                 s.theta,
                 vel,
                 self.weights.matrix,
-                omega_min=self.weights.omega_min,
+                known=Known(self.weights.omega_min, s.nearest, self._floor()),
                 weighting=self.weights.pair_modes(s.weighting),
-                nearest=s.nearest,
-                floor=self._floor(),
                 bodies=self._filter_bodies(flt),
                 obstacles=obstacles,
-                headings=s.headings if model.needs_headings else None,
+                **{name: getattr(s, name) for name in model.state_fields},
             )
             u = res.actions
             stats = merge_stats(stats, res)
@@ -340,12 +337,7 @@ class Simulator:
         u_nominal = self.to_controls(actions)
         u, stats, intervention = self.apply_filters(u_nominal)
         before, model = s.positions, sc.model
-        if model.needs_headings:
-            s.positions, s.headings, s.velocities = model.advance(
-                s.positions, s.headings, u, self.dt, sc.params
-            )
-        else:
-            s.positions, s.velocities = model.step(s.positions, s.velocities, u, self.dt)
+        model.advance_state(s, u, self.dt, sc.params)
         after = post_step.fused if self.fused_post_step else post_step.by_hooks
         reward, terminated, truncated = after(self, before, u_nominal, u, stats)
         penalty = sum(self.penalties)
