@@ -225,3 +225,29 @@ def test_joint_control_bad_action():
     a[5] = np.nan
     with pytest.raises(ValueError, match=r"agent 'agent_2' \(index 2\) = \[0.0, nan\]"):
         env.step(a)
+
+
+
+def test_wrappers_configure_the_env_they_wrap_in_place():
+    """docs/api.md: a wrapper turns on a stage of the wrapped env's core, so the env itself is
+    filtered after it is wrapped."""
+    import numpy as np
+
+    import rsvo_env
+    import wrappers
+
+    def interventions(env):
+        env.reset(seed=0)
+        total = 0.0
+        for _ in range(200):  # every agent heads for the centre: the filter must act
+            x = env.unwrapped.world.positions
+            *_, infos = env.step({a: -x[i] for i, a in enumerate(env.agents)})
+            total += sum(infos[a]["intervention"] for a in env.agents)
+        return total
+
+    env = rsvo_env.parallel_env("circular_swap", num_agents=6)
+    assert interventions(env) == 0.0  # bare: nothing filters
+    wrapped = wrappers.RCBFSafetyFilter(env)
+    assert wrapped.unwrapped is env
+    assert interventions(env) > 0.0  # the bare handle now steps through the filter
+    assert np.isfinite(interventions(wrapped))

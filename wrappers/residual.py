@@ -7,7 +7,8 @@ scripted controller already holds the agent inside the goal tolerance) unless, w
 speed limit like every other command. With ``interaction_radius``, an agent en route with no
 other agent that close follows the scripted command alone. The safety filter, when on, filters
 the sum. A thin ``BaseParallelWrapper``: it switches the core's residual mode and overrides
-nothing.
+nothing, so the wrapped env itself takes residual actions from then on (wrappers configure in
+place, ``docs/api.md``).
 
 With it, the scripted controller is the zero action; ``nominal_actions()`` still gives the
 scripted command itself (for a direct-action env), not a residual.

@@ -6,7 +6,8 @@ be integrated, on the state being integrated. So the control the filter certifie
 applied, whatever wrappers sit between this one and the base env (action repeat, action noise,
 another filter), and the infos report exactly that control (``u_safe``) next to the requested one
 (``u_nominal``). Infeasible QPs apply the least-violating action, are flagged in ``infos`` and
-counted in the episode metrics; the nominal is never passed through.
+counted in the episode metrics; the nominal is never passed through. The wrapped env itself
+is filtered from then on (wrappers configure in place, ``docs/api.md``).
 """
 
 from __future__ import annotations

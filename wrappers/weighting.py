@@ -2,7 +2,8 @@
 
 The weighting lives in the world: this wrapper sets the base env's mode (and the current
 world's, if an episode is running), and the filter reads ``world.omega``, so the two wrappers
-stack in either order. A single episode can still pick another mode through
+stack in either order. The wrapped env itself is reweighted (wrappers configure in place,
+``docs/api.md``). A single episode can still pick another mode through
 ``reset(options={"weighting": ...})``.
 """
 
