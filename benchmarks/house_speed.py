@@ -94,6 +94,8 @@ def main() -> int:
     ap.add_argument("--rev", default="927dbd7", help="the other revision (default: pre-move)")
     ap.add_argument("--blocks", type=int, default=5)
     ap.add_argument("--seconds", type=float, default=2.0)
+    ap.add_argument("--cases", nargs="+", choices=CASES, default=CASES, help="(default: all)")
+    ap.add_argument("--out", type=Path, default=OUT)
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         other = Path(tmp) / "other"
@@ -104,7 +106,7 @@ def main() -> int:
             for block in range(args.blocks):
                 trees = [("now", ROOT), ("other", other)]
                 for name, tree in trees if block % 2 == 0 else trees[::-1]:
-                    for case in CASES:
+                    for case in args.cases:
                         rates.setdefault((name, case), []).append(
                             measure(tree, case, args.seconds)
                         )
@@ -118,19 +120,20 @@ def main() -> int:
         "# The house's speed: this checkout against the library before the move",
         "",
         f"`python benchmarks/house_speed.py --rev {args.rev} --blocks {args.blocks} --seconds "
-        f"{args.seconds}`: `{head}` (now) against `{args.rev}`, each case in a process of its "
-        "own per tree, the trees alternating block by block, one thread, on this project's "
-        "2-core machine (other processes share it). Agent-steps per second, medians over the "
-        "blocks; ratio = now / then (1.00 the same speed).",
+        f"{args.seconds}{' --cases ...' if args.cases != CASES else ''}`: `{head}` (now) "
+        f"against `{args.rev}`, each case in a process of its own per tree, the trees "
+        "alternating block by block, one thread, on this project's 2-core machine (other "
+        "processes share it). Agent-steps per second, medians over the blocks; ratio = now / "
+        "then (1.00 the same speed).",
         "",
         "| case | now | then | ratio |",
         "|---|---|---|---|",
     ]
-    for case in CASES:
+    for case in args.cases:
         now = statistics.median(rates[("now", case)])
         then = statistics.median(rates[("other", case)])
         lines.append(f"| {case} | {now:,.0f} | {then:,.0f} | {now / then:.3f} |")
-    OUT.write_text("\n".join(lines) + "\n")
+    args.out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0
 

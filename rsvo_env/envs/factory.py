@@ -87,7 +87,7 @@ def filter_config(
         solver=solver,
         # a value given is used as given (a falsy one is refused by name, never replaced)
         barrier=p.get("barrier", FilterConfig.barrier) if barrier is None else barrier,
-        split=p.get("split", "capability") if split is None else split,
+        split=p.get("split", FilterConfig.split) if split is None else split,
         neighbor_radius=neighbor_radius,
         lookahead=p.get("lookahead"),
         w_max=p.get("w_max"),

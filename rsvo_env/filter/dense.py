@@ -16,13 +16,10 @@ from numpy.typing import NDArray
 from rsvo_env.dynamics.barriers import single_integrator_row, support
 from rsvo_env.filter.projection_disk import disk_support
 from rsvo_env.qp.exact import solve_rows
-from rsvo_env.util import threads
+from rsvo_env.util import sizes, threads
 
-# Up to this many agents an env, examining every pair here costs less than the general path's
-# pair search, row packing and batched solve (measured: benchmarks/dense_filter_speed.py). With
-# equal scores, the scenarios' default, the two break even at 256; with scores spread over
-# 1..10 the general path's wider search lets the dense pass win up to about 450.
-MAX_AGENTS = 256
+# Up to this many agents an env the compiled all-pairs pass serves (rsvo_env.util.sizes).
+MAX_AGENTS = sizes.DENSE_KERNEL_MAX_AGENTS
 
 
 @njit(cache=True, inline="always")

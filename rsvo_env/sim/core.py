@@ -105,7 +105,7 @@ class Simulator:
             "gamma": float(p["gamma"]),
             "goal_tolerance": float(p["goal_tolerance"]),
             "barrier": p.get("barrier", FilterConfig.barrier),
-            "split": p.get("split", "capability"),
+            "split": p.get("split", FilterConfig.split),
         }
         self.filters: list[SafetyFilter] = []
         self.penalties: list[float] = []

@@ -24,9 +24,10 @@ from rsvo_env.responsibility.svo import (
     symmetric_envs,
     weight_matrix,
 )
+from rsvo_env.util import sizes
 
-# Agents an env up to which the weight matrix is kept (8 MB per env at 1,024).
-DENSE_MAX = 1024
+# Agents an env up to which the weight matrix is kept (rsvo_env.util.sizes).
+DENSE_MAX = sizes.WEIGHT_MATRIX_MAX_AGENTS
 
 
 class Weights:

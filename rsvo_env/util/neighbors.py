@@ -12,10 +12,10 @@ from numba import njit
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from rsvo_env.util import grid
+from rsvo_env.util import grid, sizes
 
-# Below this many agents all pairs are cheaper than a KD-tree.
-DENSE_MAX_AGENTS = 64
+# Below this many agents all pairs are cheaper than a KD-tree (rsvo_env.util.sizes).
+DENSE_MAX_AGENTS = sizes.DENSE_MAX_AGENTS
 
 
 def env_offsets(positions: NDArray[np.float64], margin: float = 0.0) -> NDArray[np.float64]:
