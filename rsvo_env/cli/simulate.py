@@ -102,7 +102,6 @@ def main(argv: list[str] | None = None) -> int:
         from rsvo_env.cli.figures import episode
 
         fig = episode(out, args.scenario, args.weighting, filtered=not args.no_filter)
-        args.png.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(args.png, dpi=120, bbox_inches="tight")
         plt.close(fig)
         print(f"{'png':>18}: {args.png}")

@@ -47,11 +47,11 @@ _SQRT_HALF = np.sqrt(0.5)
 
 def settled(h: NDArray, size: NDArray) -> NDArray[np.float64]:
     """``h`` with a negative value within rounding of 0 (``SETTLE`` of the terms it is made of,
-    ``size``: the coordinates, the distance and the reaches) read as 0. A pair resting at h = 0
-    drifts by roundings around it (the state's, and the solver's allowance of ``1e-12`` of a
-    row's terms a step); reading those as violations would ask a resting agent for a recovery
-    it cannot make. A state truly below 0 keeps its h, so the rows ask it to recover at the
-    rate gamma dt."""
+    ``size``: the distance and the reaches, as each caller passes them) read as 0. A pair resting at
+    h = 0 drifts by roundings around it (the state's, and the solver's allowance of ``1e-12`` of a
+    row's terms a step); reading those as violations would ask a resting agent for a recovery it
+    cannot make. A state truly below 0 keeps its h, so the rows ask it to recover at the rate gamma
+    dt."""
     return np.where(h < -SETTLE * size, h, np.maximum(h, 0.0))
 
 
