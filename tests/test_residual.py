@@ -275,3 +275,24 @@ def test_a_stalled_agent_follows_the_script_with_a_stall_gate(stall_gate):
         assert (s.no_progress[gated] == 0).all()
         scripted += int(gated.sum())
     assert (scripted > 0) == (stall_gate is not None)
+
+
+def test_the_residual_settings_have_one_owner():
+    """Residual owns every default; BatchedEnv and ResidualAction take its values under their
+    spellings, and a training config's keywords map onto it (Residual.ENV_KEYWORDS)."""
+    import dataclasses
+    import inspect
+
+    from rsvo_env.control.residual import ENV_KEYWORDS, Residual
+    from rsvo_env.vector import BatchedEnv
+    from training.config import residual_settings
+
+    defaults = {f.name: f.default for f in dataclasses.fields(Residual)}
+    batched = inspect.signature(BatchedEnv).parameters
+    wrapper = inspect.signature(wrappers.ResidualAction).parameters
+    for keyword, name in ENV_KEYWORDS.items():
+        assert batched[keyword].default == defaults[name], keyword
+        assert wrapper[name].default == defaults[name], name
+    assert residual_settings({}) == Residual()
+    given = {"gate_radius": 0.25, "residual_scale": 2.0, "yield_radius": 1.25, "k": 3}
+    assert residual_settings(given) == Residual(0.25, scale=2.0, yield_radius=1.25)

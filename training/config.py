@@ -14,6 +14,7 @@ from typing import Any
 import yaml
 
 from rsvo_env.cli.scene_file import load_yaml
+from rsvo_env.control.residual import Residual
 from rsvo_env.envs.vector import BatchedEnv
 from training import schema
 
@@ -145,17 +146,10 @@ def hyperparameters(cfg: dict[str, Any]) -> dict[str, Any]:
     return hyper
 
 
-def residual_settings(cfg: dict[str, Any]) -> tuple[float, bool, float, Any, Any, Any]:
-    """A config's residual mode, the env's defaults where it is silent: gate radius, right-hand
-    rule, scale, yield radius, interaction radius, stall gate."""
-    return (
-        cfg.get("gate_radius", 0.5),
-        cfg.get("residual_right_hand", True),
-        cfg.get("residual_scale", 1.0),
-        cfg.get("yield_radius"),
-        cfg.get("interaction_radius"),
-        cfg.get("stall_gate"),
-    )
+def residual_settings(cfg: dict[str, Any]) -> Residual:
+    """A config's residual mode (its keywords spelled as ``BatchedEnv``'s), the defaults of
+    :class:`rsvo_env.control.residual.Residual` where it is silent."""
+    return Residual.of_env_keywords(cfg)
 
 
 def make_env(
@@ -167,17 +161,11 @@ def make_env(
 ) -> BatchedEnv:
     """The filtered batched env a config describes (``action``/``weighting``: another choice,
     e.g. ``action="direct"`` for the scripted controller under the same protocol)."""
-    gate, right_hand, scale, yield_radius, interaction_radius, stall = residual_settings(cfg)
     return BatchedEnv(
         cfg["scenario"],
         num_envs=num_envs,
         action=action or cfg["action"],
-        gate_radius=gate,
-        residual_right_hand=right_hand,
-        residual_scale=scale,
-        yield_radius=yield_radius,
-        interaction_radius=interaction_radius,
-        stall_gate=stall,
+        **residual_settings(cfg).env_keywords(),
         weighting=weighting or cfg["weighting"],
         **{**cfg["env"], **env_overrides},
     )
@@ -215,5 +203,9 @@ def make_parallel(
         cfg["scenario"], render_mode=render_mode, weighting=cfg["weighting"], **cfg["env"]
     )
     if (action or cfg["action"]) == "residual":
-        env = ResidualAction(env, *residual_settings(cfg))
+        r = residual_settings(cfg)
+        env = ResidualAction(
+            env, r.gate_radius, r.right_hand, r.scale, r.yield_radius, r.interaction_radius,
+            r.stall_gate,
+        )
     return env

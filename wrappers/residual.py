@@ -37,12 +37,12 @@ class ResidualAction(BaseParallelWrapper):
     def __init__(
         self,
         env: Any,
-        gate_radius: float = 0.5,
-        right_hand: bool = True,
-        scale: float = 1.0,
-        yield_radius: float | None = None,
-        interaction_radius: float | None = None,
-        stall_gate: float | None = None,
+        gate_radius: float = Residual.gate_radius,
+        right_hand: bool = Residual.right_hand,
+        scale: float = Residual.scale,
+        yield_radius: float | None = Residual.yield_radius,
+        interaction_radius: float | None = Residual.interaction_radius,
+        stall_gate: float | None = Residual.stall_gate,
     ) -> None:
         super().__init__(env)
         radii = (yield_radius, interaction_radius)

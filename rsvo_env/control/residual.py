@@ -46,7 +46,7 @@ class Residual:
     residual of an agent en route acts whatever its neighbours' distance), ``stall_gate`` > 0
     seconds or None (the residual acts however long the agent has made no progress)."""
 
-    gate_radius: float
+    gate_radius: float = 0.5
     right_hand: bool = True
     scale: float = 1.0
     yield_radius: float | None = None
@@ -63,6 +63,16 @@ class Residual:
         for name in ("yield_radius", "interaction_radius", "stall_gate"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, check_positive(getattr(self, name), name))
+
+    def env_keywords(self) -> dict[str, Any]:
+        """These settings as the keywords of ``BatchedEnv`` (:data:`ENV_KEYWORDS`)."""
+        return {kw: getattr(self, name) for kw, name in ENV_KEYWORDS.items()}
+
+    @classmethod
+    def of_env_keywords(cls, settings: dict[str, Any]) -> Residual:
+        """From ``BatchedEnv``'s spelling of the settings (a training config's too); a
+        setting not given takes its default here."""
+        return cls(**{name: settings[kw] for kw, name in ENV_KEYWORDS.items() if kw in settings})
 
     def open(self, positions: NDArray[np.float64], goals: NDArray[np.float64]) -> NDArray:
         """(E, N): whose residual acts. An agent en route (at least ``gate_radius`` from its
@@ -109,3 +119,14 @@ class Residual:
         nominal = scenario.nominal(state, self.right_hand)
         gated = np.where(on[..., None], self.scale * residual, 0.0)
         return planar.clip_norm(nominal + gated, u_max)
+
+
+# BatchedEnv's (and the training configs') keyword for each setting of Residual
+ENV_KEYWORDS = {
+    "gate_radius": "gate_radius",
+    "residual_right_hand": "right_hand",
+    "residual_scale": "scale",
+    "yield_radius": "yield_radius",
+    "interaction_radius": "interaction_radius",
+    "stall_gate": "stall_gate",
+}
