@@ -155,22 +155,25 @@ class Unicycle(Dynamics):
             "the unicycle's state is (positions, headings): use rsvo_env.dynamics.unicycle_step"
         )
 
-    def advance(self, positions, headings, u, dt, params):
+    def advance_state(self, state, u, dt, params):
         """The simulator's step: axle positions, headings, and each axle's mean velocity over
         the step (what the observation reports)."""
-        p, th = unicycle_step(positions, headings, u, float(params["lookahead"]), dt)
-        return p, th, (p - positions) / dt
-
-    def advance_state(self, state, u, dt, params):
-        state.positions, state.headings, state.velocities = self.advance(
-            state.positions, state.headings, u, dt, params
+        before = state.positions
+        state.positions, state.headings = unicycle_step(
+            before, state.headings, u, float(params["lookahead"]), dt
         )
+        state.velocities = (state.positions - before) / dt
 
     def to_controls(self, actions, params, planar):
-        return self.controls(actions, params)  # its actions are (v, w), in its body frame
+        """Normalised actions in [-1, 1]^2 to (v, w): ``(a_0 v_max, a_1 w_max)``, each
+        component clipped to [-1, 1] first (the action's own frame is the body's)."""
+        a = np.clip(actions, -1.0, 1.0)
+        return np.stack([a[..., 0] * params["u_max"], a[..., 1] * params["w_max"]], -1)
 
     def to_actions(self, controls, params, planar):
-        return self.actions(controls, params)
+        """The inverse of :meth:`to_controls` (no clipping)."""
+        return np.stack([controls[..., 0] / params["u_max"], controls[..., 1] / params["w_max"]],
+                        -1)  # fmt: skip
 
     def global_fields(self):
         return (("heading", -np.pi, np.pi),)
@@ -178,17 +181,6 @@ class Unicycle(Dynamics):
     def global_values(self, state, sel):
         h = state.headings[sel]
         return [np.arctan2(np.sin(h), np.cos(h))]
-
-    def controls(self, actions: NDArray, params: dict[str, Any]) -> NDArray[np.float64]:
-        """Normalised actions in [-1, 1]^2 to (v, w): ``(a_0 v_max, a_1 w_max)``, each
-        component clipped to [-1, 1] first (the action's own frame is the body's)."""
-        a = np.clip(actions, -1.0, 1.0)
-        return np.stack([a[..., 0] * params["u_max"], a[..., 1] * params["w_max"]], -1)
-
-    def actions(self, controls: NDArray, params: dict[str, Any]) -> NDArray[np.float64]:
-        """The inverse of :meth:`controls` (no clipping)."""
-        return np.stack([controls[..., 0] / params["u_max"], controls[..., 1] / params["w_max"]],
-                        -1)  # fmt: skip
 
     def toward(self, positions, headings, velocity, params):
         """A world velocity ``c`` for the look-ahead point as (v, w): ``v = e . c``,
