@@ -34,13 +34,18 @@ def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys
     logged = {k for row in rows for k, v in row.items() if v != ""}
     for key in ("rollout/success_rate", "rollout/completion_time", "rollout/intervention_rate",
                 "rollout/cost", "rollout/infeasible_steps", "rollout/ep_rew_mean",
-                "eval/success_rate"):  # fmt: skip
+                "rollout/episode_cost", "rollout/contact_agent_steps", "eval/success_rate",
+                "eval/episode_cost"):  # fmt: skip
         assert key in logged, key
     # no collision anywhere in training: the logged cost is zero in every row
     assert all(float(r["rollout/collision_steps_total"] or 0) == 0 for r in rows)
+    assert all(float(r["rollout/contact_agent_steps"] or 0) == 0 for r in rows)
     with open(run / "validation.csv") as f:
         validations = list(csv.DictReader(f))
     assert len(validations) >= 3 and all(int(v["collisions"]) == 0 for v in validations)
+    assert all(
+        float(v["episode_cost"]) == 0 and float(v["episode_length"]) > 0 for v in validations
+    )
     saved = yaml.safe_load((run / "config.yaml").read_text())
     assert saved["env"]["num_agents"] == 4 and saved["seed"] == 1 and saved["algo"] == "ppo"
     # one thread budget for the policy and the env's kernels (the config's default, 1)

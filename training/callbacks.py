@@ -22,8 +22,11 @@ from training.evaluation import (
 
 class EpisodeStats(BaseCallback):
     """Logs, over the episodes that ended since the last dump, under ``rollout/``: mean return
-    per agent, success rate, completion time, intervention rate, collision steps (the cost) and
-    infeasible steps. Read from each slot's info; an env's episode counts once (its first slot)."""
+    per agent, success rate, completion time, intervention rate, collision steps (``cost``, an
+    env's steps with a contact), an agent's episode cost (``episode_cost``: its steps in contact,
+    OmniSafe's EpCost) and infeasible steps; and ``rollout/contact_agent_steps``, every agent-step
+    in contact since training began. Read from each slot's info; an env's episode counts once
+    (its first slot)."""
 
     def __init__(self, agents_per_env: int, u_max: float, dt: float) -> None:
         super().__init__()
@@ -34,6 +37,8 @@ class EpisodeStats(BaseCallback):
         slots = self.training_env.num_envs
         self.returns = np.zeros(slots)
         self.touched = np.zeros(slots)
+        self.costs = np.zeros(slots)
+        self.contacts = 0.0
         self.collisions = 0
         self.episodes: list[tuple[float, ...]] = []
 
@@ -41,6 +46,9 @@ class EpisodeStats(BaseCallback):
         infos, dones = self.locals["infos"], self.locals["dones"]
         self.returns += self.locals["rewards"]
         self.touched += intervened([i["intervention"] for i in infos], self.u_max)
+        cost = np.array([i["cost"] for i in infos])
+        self.costs += cost
+        self.contacts += float(cost.sum())
         for k in np.flatnonzero(dones):
             if k % self.n:
                 continue
@@ -55,25 +63,32 @@ class EpisodeStats(BaseCallback):
                     float(self.touched[agents].sum() / (steps * self.n)),
                     float(info["episode_collision_steps"]),
                     float(info["episode_infeasible"]),
+                    float(self.costs[agents].mean()),
                 )
             )
             self.collisions += info["episode_collision_steps"]
         self.returns[dones] = 0.0
         self.touched[dones] = 0.0
+        self.costs[dones] = 0.0
         return True
 
     def _on_rollout_end(self) -> None:
         if not self.episodes:
             return
         rows = np.array(self.episodes)
-        names = ("return", "success_rate", "completion_time", "intervention_rate", "cost")
-        for j, name in enumerate(names):
+        means = ("return", "success_rate", "completion_time", "intervention_rate", "cost")
+        for j, name in [*enumerate(means), (6, "episode_cost")]:
             column = rows[:, j]
             if not np.isnan(column).all():
                 self.logger.record(f"rollout/{name}", float(np.nanmean(column)))
         self.logger.record("rollout/infeasible_steps", float(rows[:, 5].sum()))
         self.logger.record("rollout/collision_steps_total", int(self.collisions))
+        self.logger.record("rollout/contact_agent_steps", self.contacts)
         self.episodes = []
+
+
+# OmniSafe's columns: EpRet, EpCost, EpLen
+EPISODE = ("episode_return", "episode_cost", "episode_length")
 
 
 class Validation(BaseCallback):
@@ -98,7 +113,7 @@ class Validation(BaseCallback):
     def validate(self) -> dict[str, float]:
         policy = model_policy(self.model)
         stats = summarize(run_episodes(self.cfg, policy, self.episodes, self.seed))
-        for key in ("success_rate", "completion_time", "collisions", "infeasible", "return"):
+        for key in ("success_rate", "completion_time", "collisions", "infeasible", *EPISODE):
             self.logger.record(f"eval/{key}", stats[key])
         append_validation(self.out / "validation.csv", self.num_timesteps, stats)
         score = validation_score(stats)

@@ -15,12 +15,15 @@ import yaml
 
 from rsvo_env.cli.scene_file import load_yaml
 from rsvo_env.control.residual import Residual
+from rsvo_env.envs.factory import FILTER_KEYWORDS
 from rsvo_env.envs.vector import BatchedEnv
 from training import schema
 
 CONFIG_DIR = Path(__file__).parent / "configs"
 
-ALGOS = ("ppo", "sac")
+ALGOS = ("ppo", "sac", "ppo_lagrangian")
+# the section of hyperparameters each algorithm reads (PPO-Lagrangian is PPO plus `lagrangian`)
+SECTION = {"ppo": "ppo", "sac": "sac", "ppo_lagrangian": "ppo"}
 ACTIONS = ("direct", "residual")
 WEIGHTINGS = ("asymmetric", "symmetric")
 ENGINES = ("sb3", "rllib")
@@ -43,6 +46,7 @@ TOP: dict[str, schema.Check] = {
     "env": schema.mapping,
     "ppo": schema.mapping,
     "sac": schema.mapping,
+    "lagrangian": schema.LAGRANGIAN,
     "validation": schema.VALIDATION,
     "checkpoint_every": schema.integer(0),
     "seed": schema.integer(0),
@@ -105,13 +109,13 @@ def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
         if key not in out:
             raise ValueError(f"config has no {key!r}")
     schema.section(TOP)(out, "")
-    section = "rllib" if out["engine"] == "rllib" else out["algo"]
+    section = "rllib" if out["engine"] == "rllib" else SECTION[out["algo"]]
     if out["engine"] == "rllib" and out["algo"] != "ppo":
         raise ValueError(f"config algo = {out['algo']!r}: the rllib engine trains ppo")
     if not isinstance(out.get(section), dict):
         raise ValueError(f"config has no {section!r} section of hyperparameters")
     if out["engine"] == "sb3":
-        for algo in ALGOS:
+        for algo in ("ppo", "sac"):
             if algo in out:
                 schema.sb3_section(algo)(out[algo], algo)
         hyperparameters(out)
@@ -130,10 +134,13 @@ def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
 
 def hyperparameters(cfg: dict[str, Any]) -> dict[str, Any]:
     """The keyword arguments of the SB3 algorithm ``cfg["algo"]``, with a named activation
-    (``policy_kwargs.activation_fn: relu``) turned into its torch module class."""
+    (``policy_kwargs.activation_fn: relu``) turned into its torch module class; PPO-Lagrangian's
+    are PPO's and its ``lagrangian`` section (defaults: ``training.lagrangian.PPOLagrangian``)."""
     import torch
 
-    hyper = copy.deepcopy(cfg[cfg["algo"]])
+    hyper = copy.deepcopy(cfg[SECTION[cfg["algo"]]])
+    if cfg["algo"] == "ppo_lagrangian":
+        hyper.update(cfg.get("lagrangian") or {})
     kwargs = hyper.get("policy_kwargs") or {}
     name = kwargs.get("activation_fn")
     if name is not None:
@@ -167,8 +174,19 @@ def make_env(
         action=action or cfg["action"],
         **residual_settings(cfg).env_keywords(),
         weighting=weighting or cfg["weighting"],
-        **{**cfg["env"], **env_overrides},
+        **{**env_keywords(cfg), **env_overrides},
     )
+
+
+def env_keywords(cfg: dict[str, Any]) -> dict[str, Any]:
+    """The config's env section as the env takes it: with ``safety_filter: false`` (the
+    constrained-RL baselines) the filter's own settings (``gamma``, ...) are left out, since a
+    config written for the filtered task names them and there is no filter for them to set."""
+    env = dict(cfg["env"])
+    if env.get("safety_filter", True) is False:
+        for key in FILTER_KEYWORDS:
+            env.pop(key, None)
+    return env
 
 
 def limit_threads(threads: int) -> None:
@@ -200,12 +218,17 @@ def make_parallel(
     from wrappers.safety_filter import filtered_parallel_env
 
     env = filtered_parallel_env(
-        cfg["scenario"], render_mode=render_mode, weighting=cfg["weighting"], **cfg["env"]
+        cfg["scenario"], render_mode=render_mode, weighting=cfg["weighting"], **env_keywords(cfg)
     )
     if (action or cfg["action"]) == "residual":
         r = residual_settings(cfg)
         env = ResidualAction(
-            env, r.gate_radius, r.right_hand, r.scale, r.yield_radius, r.interaction_radius,
+            env,
+            r.gate_radius,
+            r.right_hand,
+            r.scale,
+            r.yield_radius,
+            r.interaction_radius,
             r.stall_gate,
         )
     return env

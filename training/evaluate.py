@@ -25,6 +25,7 @@ from typing import Any
 
 from rsvo_env.cli.arguments import Parser, count, output_problem
 from training import config as configs
+from training.algorithms import algorithm_class
 from training.config import make_env
 from training.evaluation import (
     evaluation_cap,
@@ -58,9 +59,8 @@ def load_model(path: str | Path, overrides: Sequence[str] = ()) -> tuple[Any, di
         from training.rllib_engine import load_module, module_policy
 
         return module_policy(load_module(path)), cfg
-    from stable_baselines3 import PPO, SAC
 
-    algo = {"ppo": PPO, "sac": SAC}[cfg["algo"]]
+    algo = algorithm_class(cfg["algo"])
     return model_policy(algo.load(path, device="cpu")), cfg
 
 

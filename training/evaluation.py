@@ -21,7 +21,7 @@ Policy = Callable[[NDArray[np.float32], Any], NDArray]
 # the per-episode records an evaluation returns, one array of length `episodes` each
 FIELDS = (
     "success", "completion_time", "collision_steps", "min_distance", "infeasible",
-    "return", "intervention", "intervention_rate", "steps", "arrived",
+    "return", "intervention", "intervention_rate", "steps", "arrived", "cost",
 )  # fmt: skip
 
 
@@ -88,6 +88,7 @@ def run_episodes(
     E, N = env.num_envs, env.num_agents
     out = {k: np.zeros(E) for k in FIELDS}
     returns, effort, touched = np.zeros((E, N)), np.zeros((E, N)), np.zeros((E, N))
+    costs = np.zeros((E, N))
     finished = np.zeros(E, dtype=bool)
     residual = env.sim.residual
     # agent-steps short of the goal, and those in which the policy's residual acted
@@ -101,6 +102,7 @@ def run_episodes(
         live = ~finished
         returns[live] += reward[live]
         effort[live] += info["intervention"][live]
+        costs[live] += info["cost"][live]
         touched[live] += intervened(info["intervention"][live], u_max)
         ended = info["_final_obs"] & live
         if ended.any():
@@ -112,6 +114,7 @@ def run_episodes(
             out["min_distance"][ended] = info["episode_min_distance"][ended]
             out["infeasible"][ended] = info["episode_infeasible"][ended]
             out["return"][ended] = returns[ended].mean(axis=1)
+            out["cost"][ended] = costs[ended].mean(axis=1)
             out["intervention"][ended] = effort[ended].sum(axis=1) / (steps * N)
             out["intervention_rate"][ended] = touched[ended].sum(axis=1) / (steps * N)
             out["steps"][ended] = steps
@@ -135,7 +138,11 @@ def summarize(records: dict[str, NDArray]) -> dict[str, float]:
         "collisions": int(records["collision_steps"].sum()),
         "min_distance": float(records["min_distance"].min()),
         "infeasible": int(records["infeasible"].sum()),
-        "return": float(records["return"].mean()),
+        # OmniSafe's EpRet, EpCost, EpLen: an agent's episode return and cost (a step in contact
+        # costs 1), means over agents and episodes, and the episode's length in steps
+        "episode_return": float(records["return"].mean()),
+        "episode_cost": float(records["cost"].mean()),
+        "episode_length": float(records["steps"].mean()),
         "intervention": float(records["intervention"].mean()),
         "intervention_rate": float(records["intervention_rate"].mean()),
         # residual actions: the share of agent-steps short of the goal in which the residual acted

@@ -117,6 +117,16 @@ VALIDATION = section(
     }
 )
 
+# PPO-Lagrangian's constraint (training/lagrangian.py): the allowed mean episode cost of an
+# agent, the multiplier's start and its dual-ascent step
+LAGRANGIAN = section(
+    {
+        "cost_limit": real(0.0, float("inf")),
+        "multiplier_init": real(0.0, float("inf")),
+        "multiplier_lr": real(positive=True),
+    }
+)
+
 RLLIB = section(
     {
         "lr": real(positive=True),
@@ -159,9 +169,9 @@ def _signature_fields(cls: type, skip: set[str]) -> dict[str, Check]:
 def sb3_section(algo: str) -> Check:
     """The section of SB3 algorithm ``algo`` (``ppo``, ``sac``): its constructor's keywords,
     typed by their defaults, and ``policy_kwargs`` checked against its MlpPolicy's."""
-    from stable_baselines3 import PPO, SAC
+    from training.algorithms import algorithm_class
 
-    cls = {"ppo": PPO, "sac": SAC}[algo]
+    cls = algorithm_class(algo)
     fields = _signature_fields(cls, _SET_BY_TRAINER)
     policy = cls.policy_aliases["MlpPolicy"]
     policy_fields = _signature_fields(
@@ -177,7 +187,7 @@ def sb3_section(algo: str) -> Check:
         if name in fields:
             fields[name] = optional(_number_or_text(name, auto=algo == "sac"))
     fields.update({k: v for k, v in SB3_RANGES.items() if k in fields})
-    if algo == "ppo":  # it normalises advantages over a minibatch: at least two samples
+    if algo != "sac":  # PPO normalises advantages over a minibatch: at least two samples
         fields["batch_size"] = integer(2)
     return section(fields)
 

@@ -21,6 +21,7 @@ from typing import Any
 
 from rsvo_env.cli.arguments import Parser, count, output_problem
 from training import config as configs
+from training.algorithms import algorithm_class
 
 # flags of the RLlib engine alone: given with another engine they would be ignored
 RLLIB_FLAGS = ("num_env_runners", "num_envs_per_env_runner", "address")
@@ -86,7 +87,6 @@ def train(
     verbose: bool = False,
 ) -> dict[str, Any]:
     """Train as ``cfg`` says into ``out``; returns the run's summary (also in summary.json)."""
-    from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
     from stable_baselines3.common.logger import configure
     from stable_baselines3.common.vec_env import VecMonitor
@@ -100,8 +100,11 @@ def train(
     configs.limit_threads(cfg["threads"])
     batched = configs.make_env(cfg, num_envs=cfg["num_envs"])
     venv = VecMonitor(SB3VecEnv(batched))
-    algo = {"ppo": PPO, "sac": SAC}[cfg["algo"]]
-    model = algo("MlpPolicy", venv, seed=cfg["seed"], verbose=0, **configs.hyperparameters(cfg))
+    algo = algorithm_class(cfg["algo"])
+    hyper = configs.hyperparameters(cfg)
+    if cfg["algo"] == "ppo_lagrangian":
+        hyper["multiplier_log"] = str(out / "lagrangian.csv")
+    model = algo("MlpPolicy", venv, seed=cfg["seed"], verbose=0, **hyper)
     model.set_logger(configure(str(out), ["csv", "tensorboard"] + (["stdout"] if verbose else [])))
     slots = venv.num_envs
     limit = TimeLimit(time_limit)
