@@ -21,13 +21,14 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from numpy.typing import NDArray
 
 from rsvo_env.geometry import pairs
 from rsvo_env.qp import exact
 from rsvo_env.responsibility.svo import Weighting
-from rsvo_env.util.planar import clip_norm, norm
+from rsvo_env.util import sizes, threads
+from rsvo_env.util.planar import clip_norm
 
 # below this fraction of its preferred speed an agent counts as held still (it sidesteps)
 SIDESTEP = 0.0625
@@ -39,9 +40,52 @@ SIDESTEP = 0.0625
 # goal for good; an agent still closing in keeps its speed (docs/liveness.md)
 ARRIVE = 2.0
 HOLD_SECONDS = 0.3
+# the speed limit as an octagon inscribed in its disk: 8 unit normals, the offset u_max cos(pi/8)
 _OCTAGON = np.stack(
     [np.cos(np.arange(8) * np.pi / 4), np.sin(np.arange(8) * np.pi / 4)], axis=-1
 )
+
+
+@njit(cache=True, inline="always")
+def _plane(x, v, radii, me, other, vo, avoid, slack, inv_tau, dt):
+    """Agent ``me``'s R-ORCA half-plane against ``other`` (read at velocity ``vo``) as a row
+    ``(ax, ay, b)`` of ``A . v <= b``: ``avoid`` its share of the avoidance, ``slack`` of the
+    slack (eq. ``rorca``)."""
+    rx, ry = x[other, 0] - x[me, 0], x[other, 1] - x[me, 1]
+    wx0, wy0 = v[me, 0] - vo[0], v[me, 1] - vo[1]
+    R = radii[me] + radii[other]
+    d2, R2 = rx * rx + ry * ry, R * R
+    if d2 > R2:
+        wx, wy = wx0 - inv_tau * rx, wy0 - inv_tau * ry
+        w2 = wx * wx + wy * wy
+        dot1 = wx * rx + wy * ry
+        if dot1 < 0.0 and dot1 * dot1 > R2 * w2:  # the cutoff circle
+            wl = np.sqrt(w2)
+            ux, uy = wx / wl, wy / wl
+            dx, dy = uy, -ux
+            s = R * inv_tau - wl
+            cx, cy = s * ux, s * uy
+        else:  # a leg
+            leg = np.sqrt(d2 - R2)
+            if rx * wy - ry * wx > 0.0:
+                dx, dy = (rx * leg - ry * R) / d2, (rx * R + ry * leg) / d2
+            else:
+                dx, dy = -(rx * leg + ry * R) / d2, -(-rx * R + ry * leg) / d2
+            dot2 = wx0 * dx + wy0 * dy
+            cx, cy = dot2 * dx - wx0, dot2 * dy - wy0
+    else:  # overlapping: leave within one step
+        wx, wy = wx0 - rx / dt, wy0 - ry / dt
+        wl = np.sqrt(wx * wx + wy * wy)
+        ux, uy = (wx / wl, wy / wl) if wl > 0.0 else (1.0, 0.0)
+        dx, dy = uy, -ux
+        s = R / dt - wl
+        cx, cy = s * ux, s * uy
+    # A . u > 0 (A the row below): the current velocity already meets the row, and u is room
+    # left to close (slack), not avoidance
+    sh = avoid if dy * cx - dx * cy <= 0.0 else slack
+    px, py = v[me, 0] + sh * cx, v[me, 1] + sh * cy
+    # the half-plane det(d, point - v) <= 0 as a row
+    return dy, -dx, dy * px - dx * py
 
 
 @njit(cache=True)
@@ -53,61 +97,166 @@ def _half_planes(x, v, radii, I, J, share, tau, dt, parked, seen):
     P = I.shape[0]
     A = np.empty((2 * P, 2))
     b = np.empty(2 * P)
-    inv_tau = 1.0 / tau
     for p in range(P):
-        i, j = I[p], J[p]
         for side in range(2):
-            me, other = (i, j) if side == 0 else (j, i)
-            rx, ry = x[other, 0] - x[me, 0], x[other, 1] - x[me, 1]
+            me, other = (I[p], J[p]) if side == 0 else (J[p], I[p])
             vo = seen[other] if parked[me] and not parked[other] else v[other]
-            wx0, wy0 = v[me, 0] - vo[0], v[me, 1] - vo[1]
-            R = radii[me] + radii[other]
-            d2, R2 = rx * rx + ry * ry, R * R
-            if d2 > R2:
-                wx, wy = wx0 - inv_tau * rx, wy0 - inv_tau * ry
-                w2 = wx * wx + wy * wy
-                dot1 = wx * rx + wy * ry
-                if dot1 < 0.0 and dot1 * dot1 > R2 * w2:  # the cutoff circle
-                    wl = np.sqrt(w2)
-                    ux, uy = wx / wl, wy / wl
-                    dx, dy = uy, -ux
-                    s = R * inv_tau - wl
-                    cx, cy = s * ux, s * uy
-                else:  # a leg
-                    leg = np.sqrt(d2 - R2)
-                    if rx * wy - ry * wx > 0.0:
-                        dx, dy = (rx * leg - ry * R) / d2, (rx * R + ry * leg) / d2
-                    else:
-                        dx, dy = -(rx * leg + ry * R) / d2, -(-rx * R + ry * leg) / d2
-                    dot2 = wx0 * dx + wy0 * dy
-                    cx, cy = dot2 * dx - wx0, dot2 * dy - wy0
-            else:  # overlapping: leave within one step
-                wx, wy = wx0 - rx / dt, wy0 - ry / dt
-                wl = np.sqrt(wx * wx + wy * wy)
-                ux, uy = (wx / wl, wy / wl) if wl > 0.0 else (1.0, 0.0)
-                dx, dy = uy, -ux
-                s = R / dt - wl
-                cx, cy = s * ux, s * uy
-            # A . u > 0 (A the row below): the current velocity already meets the row, and u is
-            # room left to close (slack), not avoidance
-            sh = share[p, side] if dy * cx - dx * cy <= 0.0 else share[p, 1 - side]
-            px, py = v[me, 0] + sh * cx, v[me, 1] + sh * cy
+            row = _plane(x, v, radii, me, other, vo, share[p, side], share[p, 1 - side],
+                         1.0 / tau, dt)  # fmt: skip
             k = p + side * P
-            # the half-plane det(d, point - v) <= 0 as a row
-            A[k, 0], A[k, 1] = dy, -dx
-            b[k] = dy * px - dx * py
+            A[k, 0], A[k, 1], b[k] = row
     return A, b
 
 
 @njit(cache=True)
-def _goal_clearance(x, g, r, I, J, out):
-    """``out[i]``: the smallest gap between agent i's goal and a listed neighbour's body."""
-    out[:] = np.inf
-    for p in range(I.shape[0]):
-        i, j = I[p], J[p]
-        for a, b in ((i, j), (j, i)):
-            dx, dy = g[a, 0] - x[b, 0], g[a, 1] - x[b, 1]
-            out[a] = min(out[a], np.sqrt(dx * dx + dy * dy) - r[a] - r[b])
+def _neighbor_lists(I, J, x, cut, M):
+    """Each agent's candidate neighbours (CSR ``offsets`` (M + 1,), ``other``, ``pair``,
+    ``side``) among the pairs (I, J) within ``cut`` of each other: the pairs where it is first,
+    in pair order, then those where it is second, the order in which an agent's rows stack."""
+    P = I.shape[0]
+    near = np.empty(P, dtype=np.bool_)
+    offsets = np.zeros(M + 1, dtype=np.int64)
+    for p in range(P):
+        dx, dy = x[I[p], 0] - x[J[p], 0], x[I[p], 1] - x[J[p], 1]
+        near[p] = np.sqrt(dx * dx + dy * dy) <= cut
+        if near[p]:
+            offsets[I[p] + 1] += 1
+            offsets[J[p] + 1] += 1
+    for a in range(M):
+        offsets[a + 1] += offsets[a]
+    fill = offsets[:-1].copy()
+    other = np.empty(offsets[M], dtype=np.int64)
+    pair = np.empty(offsets[M], dtype=np.int64)
+    side = np.empty(offsets[M], dtype=np.int8)
+    for s in range(2):
+        for p in range(P):
+            if near[p]:
+                me, them = (I[p], J[p]) if s == 0 else (J[p], I[p])
+                k = fill[me]
+                other[k], pair[k], side[k] = them, p, s
+                fill[me] += 1
+    return offsets, other, pair, side
+
+
+@njit(cache=True, inline="always")
+def _capped(a, x, g, pref, r, offsets, other, tau, held, out):
+    """Agent a's preferred velocity with the arrival cap (:func:`arrival_capped`) into out[a]."""
+    gap = np.inf
+    for k in range(offsets[a], offsets[a + 1]):
+        j = other[k]
+        dx, dy = g[a, 0] - x[j, 0], g[a, 1] - x[j, 1]
+        gap = min(gap, np.sqrt(dx * dx + dy * dy) - r[a] - r[j])
+    px, py = pref[a, 0], pref[a, 1]
+    speed = np.sqrt(px * px + py * py)
+    gx, gy = g[a, 0] - x[a, 0], g[a, 1] - x[a, 1]
+    dist = np.sqrt(gx * gx + gy * gy)
+    scale = 1.0
+    if speed * tau - dist > gap and speed * tau > ARRIVE * dist and held[a]:
+        scale = ARRIVE * dist / (tau * speed)
+    out[a, 0], out[a, 1] = px * scale, py * scale
+
+
+@njit(cache=True, inline="always")
+def _agent(a, x, v, pref, r, offsets, other, pair, side, w, tied, park, K, u_max, inv_tau, dt,
+           rows, near, out):  # fmt: skip
+    """Agent a's R-ORCA velocity (before the speed clip) into out[a]: the half-planes of its
+    ``K`` nearest candidates (ties: the earlier in its list), the octagon, the exact QP, and
+    the sidestep where the half-planes hold it still."""
+    start, stop = offsets[a], offsets[a + 1]
+    count = stop - start
+    keep = count if K < 0 else min(K, count)
+    # the K nearest, by an insertion sort into near[:keep] (K is ORCA's 10)
+    filled = 0
+    for k in range(start, stop):
+        j = other[k]
+        dx, dy = x[a, 0] - x[j, 0], x[a, 1] - x[j, 1]
+        d2 = dx * dx + dy * dy
+        if filled == keep and d2 >= near[keep - 1, 0]:
+            continue
+        pos = min(filled, keep - 1)
+        while pos > 0 and near[pos - 1, 0] > d2:
+            near[pos] = near[pos - 1]
+            pos -= 1
+        near[pos, 0], near[pos, 1] = d2, k
+        filled = min(filled + 1, keep)
+    bound = near[keep - 1, 0] if keep > 0 else -1.0
+    last = near[keep - 1, 1] if keep > 0 else -1.0
+    nrows = 0
+    for k in range(start, stop):
+        j = other[k]
+        dx, dy = x[a, 0] - x[j, 0], x[a, 1] - x[j, 1]
+        d2 = dx * dx + dy * dy
+        if d2 > bound or (d2 == bound and k > last):
+            continue
+        p = pair[k]
+        if tied:
+            # an agent parked on its goal takes all of the avoidance from one en route, reading
+            # it at its preferred velocity so as to step aside before it is pushed: an egoist at
+            # rest would otherwise stand as a wall (the shares still sum to 1)
+            first, second = (a, j) if side[k] == 0 else (j, a)
+            s0 = 1.0 - w[p, 0]
+            if park[first] and not park[second]:
+                s0 = 1.0
+            elif park[second] and not park[first]:
+                s0 = 0.0
+            s1 = 1.0 - s0
+        else:
+            s0, s1 = 1.0 - w[p, 0], 1.0 - w[p, 1]
+        avoid, slack = (s0, s1) if side[k] == 0 else (s1, s0)
+        vo = pref[j] if park[a] and not park[j] else v[j]
+        ax, ay, b = _plane(x, v, r, a, j, vo, avoid, slack, inv_tau, dt)
+        exact.set_row(rows, nrows, ax, ay, b)
+        nrows += 1
+    edge = u_max * np.cos(np.pi / 8)
+    for q in range(8):
+        exact.set_row(rows, nrows, _OCTAGON[q, 0], _OCTAGON[q, 1], edge)
+        nrows += 1
+    px, py = pref[a, 0], pref[a, 1]
+    res = out[a]
+    exact.solve_rows(px, py, rows, nrows, -u_max, -u_max, u_max, u_max, res)
+    # an agent the half-planes hold still while it wants to move (a jam that is symmetric, as
+    # in a ring around a common goal) sidesteps: the velocity closest to its preferred one
+    # turned to its right, which the half-planes of touching neighbours let it take
+    if np.sqrt(res[0] * res[0] + res[1] * res[1]) < SIDESTEP * np.sqrt(px * px + py * py):
+        exact.solve_rows(py, -px, rows, nrows, -u_max, -u_max, u_max, u_max, res)
+
+
+@njit(cache=True)
+def _widest_list(offsets, K):
+    widest = 0
+    for a in range(offsets.shape[0] - 1):
+        widest = max(widest, offsets[a + 1] - offsets[a])
+    return widest if K < 0 else min(widest, K)
+
+
+@njit(cache=True)
+def _stage_serial(x, v, g, pref0, r, offsets, other, pair, side, w, tied, park, held, K, u_max,
+                  tau, dt, pref, out):  # fmt: skip
+    M = x.shape[0]
+    for a in range(M):
+        _capped(a, x, g, pref0, r, offsets, other, tau, held, pref)
+    width = _widest_list(offsets, K)
+    rows, near = np.empty((width + 8, 3)), np.empty((max(width, 1), 2))
+    for a in range(M):
+        _agent(a, x, v, pref, r, offsets, other, pair, side, w, tied, park, K, u_max, 1.0 / tau,
+               dt, rows, near, out)  # fmt: skip
+
+
+@njit(cache=True, parallel=True)
+def _stage_parallel(x, v, g, pref0, r, offsets, other, pair, side, w, tied, park, held, K, u_max,
+                    tau, dt, pref, out):  # fmt: skip
+    M = x.shape[0]
+    chunk = 64
+    blocks = (M + chunk - 1) // chunk
+    for c in prange(blocks):
+        for a in range(c * chunk, min(M, (c + 1) * chunk)):
+            _capped(a, x, g, pref0, r, offsets, other, tau, held, pref)
+    width = _widest_list(offsets, K)
+    for c in prange(blocks):
+        rows, near = np.empty((width + 8, 3)), np.empty((max(width, 1), 2))
+        for a in range(c * chunk, min(M, (c + 1) * chunk)):
+            _agent(a, x, v, pref, r, offsets, other, pair, side, w, tied, park, K, u_max,
+                   1.0 / tau, dt, rows, near, out)  # fmt: skip
 
 
 def arrival_capped(
@@ -118,14 +267,19 @@ def arrival_capped(
     look-ahead ``|preferred| tau`` passes the goal by more than the gap between the goal and a
     neighbour's body (pairs I, J; flat (M, 2) positions and goals, radii (M,)); with ``held``
     (M,), only there."""
-    gap = np.empty(len(positions))
-    _goal_clearance(positions, goals, radii, I, J, gap)
-    speed, dist = norm(preferred), norm(goals - positions)
-    over = (speed * tau - dist > gap) & (speed * tau > ARRIVE * dist)
-    if held is not None:
-        over &= held
-    scale = np.where(over, ARRIVE * dist / (tau * np.where(over, speed, 1.0)), 1.0)
-    return preferred * scale[:, None]
+    M = len(positions)
+    f = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
+    offsets, other, _, _ = _neighbor_lists(I, J, f(positions), np.inf, M)
+    hold = np.ones(M, dtype=np.bool_) if held is None else np.ascontiguousarray(held)
+    out = np.empty((M, 2))
+    _cap_all(f(positions), f(goals), f(preferred), f(radii), offsets, other, float(tau), hold, out)
+    return out
+
+
+@njit(cache=True)
+def _cap_all(x, g, pref, r, offsets, other, tau, held, out):
+    for a in range(x.shape[0]):
+        _capped(a, x, g, pref, r, offsets, other, tau, held, out)
 
 
 class Rules(NamedTuple):
@@ -163,57 +317,32 @@ def rorca_velocities(
     if given; these three are ``rules`` (:class:`Rules`, None: none of them)."""
     parked, goals, held = (None, None, None) if rules is None else rules
     E, n = positions.shape[:2]
+    M = E * n
     radii = np.broadcast_to(radii, (E, n))
     if neighbor_dist is None:
         neighbor_dist = 10.0 * float(radii.max())
-    I, J = pairs.candidate_pairs(positions, neighbor_dist)
-    w = pairs.weights_of(theta, modes, I, J)
-    x = positions.reshape(E * n, 2)
-    v = velocities.reshape(E * n, 2)
-    M = E * n
-    share = 1.0 - w
-    park = np.zeros(M, dtype=np.bool_)
-    if parked is not None:
-        # an agent parked on its goal takes all of the avoidance from one en route, reading it
-        # at its preferred velocity so as to step aside before it is pushed: an egoist at rest
-        # would otherwise stand as a wall (the shares still sum to 1)
-        park = np.ascontiguousarray(parked).reshape(-1)
-        s = share[:, 0]
-        s = np.where(park[I] & ~park[J], 1.0, np.where(park[J] & ~park[I], 0.0, s))
-        share = np.stack([s, 1.0 - s], axis=1)
-    r = np.ascontiguousarray(radii).reshape(-1)
-    pref = preferred.reshape(M, 2)
-    if goals is not None:
-        hold = None if held is None else np.ascontiguousarray(held).reshape(-1)
-        pref = arrival_capped(pref, x, goals.reshape(M, 2), r, tau, I, J, hold)
-    A, b = _half_planes(x, v, r, I, J, share, float(tau), float(dt), park,
-                        np.ascontiguousarray(pref, dtype=np.float64))  # fmt: skip
-    owner = np.concatenate([I, J])
-    if max_neighbors is not None and len(owner):
-        # ORCA's neighbour rule: each agent's nearest max_neighbors within neighbor_dist
-        d2 = ((x[I] - x[J]) ** 2).sum(axis=-1)
-        by = np.lexsort((np.concatenate([d2, d2]), owner))
-        first = np.searchsorted(owner[by], owner[by], side="left")
-        keep = np.zeros(len(owner), dtype=bool)
-        keep[by] = np.arange(len(by)) - first < max_neighbors
-        owner, A, b = owner[keep], A[keep], b[keep]
-    owner = np.concatenate([owner, np.repeat(np.arange(M), 8)])
-    A = np.concatenate([A, np.tile(_OCTAGON, (M, 1))])
-    b = np.concatenate([b, np.full(8 * M, u_max * np.cos(np.pi / 8))])
-    order = np.argsort(owner, kind="stable")
-    offsets = np.zeros(M + 1, dtype=np.int64)
-    offsets[1:] = np.cumsum(np.bincount(owner, minlength=M))
-    box = np.array([u_max, u_max])
-    rows = (A[order], b[order], offsets, -box, box)
-    out = exact.solve_csr(pref, *rows)[0]
-    # an agent the half-planes hold still while it wants to move (a jam that is symmetric, as
-    # in a ring around a common goal) sidesteps: the velocity closest to its preferred one
-    # turned to its right, which the half-planes of touching neighbours let it take
-    speed = np.sqrt((pref * pref).sum(axis=-1))
-    held = np.sqrt((out * out).sum(axis=-1)) < SIDESTEP * speed
-    if held.any():
-        right = np.stack([pref[:, 1], -pref[:, 0]], axis=-1)
-        out = np.where(held[:, None], exact.solve_csr(right, *rows)[0], out)
+    flat = lambda a: np.ascontiguousarray(a, dtype=np.float64).reshape(M, -1)  # noqa: E731
+    x, v, pref0 = flat(positions), flat(velocities), flat(preferred)
+    if n <= sizes.DENSE_MAX_AGENTS:  # every pair, cut to neighbor_dist in the compiled pass
+        (I, J), cut = pairs.all_pairs(n, E), float(neighbor_dist)
+    else:
+        (I, J), cut = pairs.candidate_pairs(positions, neighbor_dist), np.inf
+    w = np.ascontiguousarray(pairs.weights_of(theta, modes, I, J))
+    offsets, other, pair, side = _neighbor_lists(I, J, x, cut, M)
+    r = flat(radii).reshape(M)
+    park = np.zeros(M, np.bool_) if parked is None else np.ascontiguousarray(parked).reshape(M)
+    # the arrival cap applies where goals are given (to the agents held, if given)
+    g = x if goals is None else flat(goals)
+    if goals is None:
+        hold = np.zeros(M, np.bool_)
+    else:
+        hold = np.ones(M, np.bool_) if held is None else np.ascontiguousarray(held).reshape(M)
+    K = -1 if max_neighbors is None else int(max_neighbors)
+    pref, out = np.empty((M, 2)), np.empty((M, 2))
+    threads.launch(
+        _stage_serial, _stage_parallel, M, x, v, g, pref0, r, offsets, other, pair, side, w,
+        parked is not None, park, hold, K, float(u_max), float(tau), float(dt), pref, out,
+    )  # fmt: skip
     # where the half-planes leave no room the least-violating point may lie past the octagon
     # (its rows are relaxed too): the speed limit holds regardless
     return clip_norm(out, u_max).reshape(E, n, 2)

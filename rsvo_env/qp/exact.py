@@ -119,7 +119,7 @@ def _max_violation(ux, uy, rows, nrows):
 
 
 @njit(cache=True, inline="always")
-def _set_row(rows, k, ax, ay, b):
+def set_row(rows, k, ax, ay, b):
     """Store row k normalised to a unit normal (a zero row keeps its right side)."""
     norm = np.hypot(ax, ay)
     if norm > 0.0:
@@ -138,7 +138,7 @@ def _solve_one(nom, A, b, mask, lo, hi, rows, out):
     nrows = 0
     for k in range(A.shape[0]):
         if mask[k]:
-            _set_row(rows, nrows, A[k, 0], A[k, 1], b[k])
+            set_row(rows, nrows, A[k, 0], A[k, 1], b[k])
             nrows += 1
     return solve_rows(nom[0], nom[1], rows, nrows, lo[0], lo[1], hi[0], hi[1], out)
 
@@ -222,7 +222,7 @@ def _solve_parallel(nominal, A, b, mask, lo, hi, out, feasible, active, violatio
 def _solve_csr_one(i, nominal, A, b, offsets, lo, hi, rows, out, feasible, active, violation):
     nrows = 0
     for k in range(offsets[i], offsets[i + 1]):
-        _set_row(rows, nrows, A[k, 0], A[k, 1], b[k])
+        set_row(rows, nrows, A[k, 0], A[k, 1], b[k])
         nrows += 1
     nom = nominal[i]
     ok, act, vio = solve_rows(nom[0], nom[1], rows, nrows, lo[i, 0], lo[i, 1], hi[i, 0], hi[i, 1],
