@@ -199,7 +199,7 @@ def learned(run: Path) -> list[str]:
         " infeasible steps | residual acting |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for n, episodes, cap in ((12, 100, 1000), (100, 100, 1000), (1000, 5, 3000)):
+    for n, episodes, cap in ((12, 100, 1000), (100, 100, 1000), (1000, 20, 3000)):
         policy, cfg = load_model(model, [f"env.num_agents={n}", f"validation.max_steps={cap}"])
         r = evaluate_loaded(policy, cfg, model, episodes, 1000, compare_scripted=True)
         a, b = r["policy"], r["scripted"]

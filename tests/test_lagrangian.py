@@ -130,3 +130,24 @@ def test_a_lagrangian_model_loads_for_evaluation(tmp_path):
     )  # fmt: skip
     assert done.returncode == 0, done.stderr[-2000:]
     assert "success" in done.stdout
+
+
+def test_the_safe_rl_comparison_holds_its_claims():
+    """benchmarks/results/safe_rl.json (written with safe_rl.md by benchmarks/safe_rl.py): four
+    methods on both scenarios, three training seeds each; behind the filter the cost is exactly
+    0 in training and at evaluation, and each unfiltered method paid contacts in training."""
+    import json
+
+    results = json.loads((ROOT / "benchmarks/results/safe_rl.json").read_text())
+    for scenario in ("circular_swap", "crowd"):
+        for method in ("scripted", "residual", "ppo", "ppo_lagrangian"):
+            seeds = results[f"{scenario}/{method}"]
+            assert len(seeds) == (1 if method == "scripted" else 3), (scenario, method)
+            assert all(s["episodes"] == 100 for s in seeds)
+            if method in ("scripted", "residual"):
+                assert all(s["episode_cost"] == 0 and s["collisions"] == 0 for s in seeds)
+            if method != "scripted":
+                contacts = [s["train_contacts"] for s in seeds]
+                assert all(c == 0 for c in contacts) if method == "residual" else min(contacts) > 0
+    text = (ROOT / "benchmarks/results/safe_rl.md").read_text()
+    assert "PPO-Lagrangian, no filter" in text and "![training curves](safe_rl.png)" in text
