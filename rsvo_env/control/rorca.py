@@ -157,11 +157,14 @@ def _capped(a, x, g, pref, r, offsets, other, tau, held, out):
 
 
 @njit(cache=True, inline="always")
-def _agent(a, x, v, pref, r, offsets, other, pair, side, w, tied, park, K, u_max, inv_tau, dt,
-           rows, near, out):  # fmt: skip
+def _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out):
     """Agent a's R-ORCA velocity (before the speed clip) into out[a]: the half-planes of its
     ``K`` nearest candidates (ties: the earlier in its list), the octagon, the exact QP, and
-    the sidestep where the half-planes hold it still."""
+    the sidestep where the half-planes hold it still. ``lists``: :func:`_neighbor_lists`;
+    ``settings``: (K, u_max, tau, dt)."""
+    offsets, other, pair, side = lists
+    K, u_max, tau, dt = settings
+    inv_tau = 1.0 / tau
     start, stop = offsets[a], offsets[a + 1]
     count = stop - start
     keep = count if K < 0 else min(K, count)
@@ -230,21 +233,27 @@ def _widest_list(offsets, K):
 
 
 @njit(cache=True)
-def _stage_serial(x, v, g, pref0, r, offsets, other, pair, side, w, tied, park, held, K, u_max,
-                  tau, dt, pref, out):  # fmt: skip
+def _stage_serial(motion, lists, w, tied, park, held, settings, pref, out):
+    """R-ORCA for every agent: ``motion`` (x, v, goals, preferred, radii), ``lists`` and
+    ``settings`` as :func:`_agent` reads them; the capped preferred velocities into ``pref``."""
+    x, v, g, pref0, r = motion
+    offsets, other = lists[0], lists[1]
+    K, tau = settings[0], settings[2]
     M = x.shape[0]
     for a in range(M):
         _capped(a, x, g, pref0, r, offsets, other, tau, held, pref)
     width = _widest_list(offsets, K)
     rows, near = np.empty((width + 8, 3)), np.empty((max(width, 1), 2))
     for a in range(M):
-        _agent(a, x, v, pref, r, offsets, other, pair, side, w, tied, park, K, u_max, 1.0 / tau,
-               dt, rows, near, out)  # fmt: skip
+        _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out)
 
 
 @njit(cache=True, parallel=True)
-def _stage_parallel(x, v, g, pref0, r, offsets, other, pair, side, w, tied, park, held, K, u_max,
-                    tau, dt, pref, out):  # fmt: skip
+def _stage_parallel(motion, lists, w, tied, park, held, settings, pref, out):
+    """:func:`_stage_serial` over chunks of agents in parallel."""
+    x, v, g, pref0, r = motion
+    offsets, other = lists[0], lists[1]
+    K, tau = settings[0], settings[2]
     M = x.shape[0]
     chunk = 64
     blocks = (M + chunk - 1) // chunk
@@ -255,8 +264,7 @@ def _stage_parallel(x, v, g, pref0, r, offsets, other, pair, side, w, tied, park
     for c in prange(blocks):
         rows, near = np.empty((width + 8, 3)), np.empty((max(width, 1), 2))
         for a in range(c * chunk, min(M, (c + 1) * chunk)):
-            _agent(a, x, v, pref, r, offsets, other, pair, side, w, tied, park, K, u_max,
-                   1.0 / tau, dt, rows, near, out)  # fmt: skip
+            _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out)
 
 
 def arrival_capped(
@@ -328,7 +336,7 @@ def rorca_velocities(
     else:
         (I, J), cut = pairs.candidate_pairs(positions, neighbor_dist), np.inf
     w = np.ascontiguousarray(pairs.weights_of(theta, modes, I, J))
-    offsets, other, pair, side = _neighbor_lists(I, J, x, cut, M)
+    lists = _neighbor_lists(I, J, x, cut, M)
     r = flat(radii).reshape(M)
     park = np.zeros(M, np.bool_) if parked is None else np.ascontiguousarray(parked).reshape(M)
     # the arrival cap applies where goals are given (to the agents held, if given)
@@ -339,9 +347,10 @@ def rorca_velocities(
         hold = np.ones(M, np.bool_) if held is None else np.ascontiguousarray(held).reshape(M)
     K = -1 if max_neighbors is None else int(max_neighbors)
     pref, out = np.empty((M, 2)), np.empty((M, 2))
+    settings = (K, float(u_max), float(tau), float(dt))
     threads.launch(
-        _stage_serial, _stage_parallel, M, x, v, g, pref0, r, offsets, other, pair, side, w,
-        parked is not None, park, hold, K, float(u_max), float(tau), float(dt), pref, out,
+        _stage_serial, _stage_parallel, M, (x, v, g, pref0, r), lists, w, parked is not None,
+        park, hold, settings, pref, out,
     )  # fmt: skip
     # where the half-planes leave no room the least-violating point may lie past the octagon
     # (its rows are relaxed too): the speed limit holds regardless
