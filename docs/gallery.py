@@ -38,7 +38,18 @@ def scenario_page(env_id: str, scenario: str) -> str:
 
     cls = SCENARIOS[scenario]
     about = " ".join(inspect.cleandoc(cls.__doc__ or "").split())
+    from rsvo_env import dynamics
+
     rows = "\n".join(f"| `{k}` | `{v!r}` |" for k, v in cls.defaults.items())
+    own = dynamics.MODELS[cls.dynamics].scenario_defaults
+    rows += "".join(f"\n| `{k}` | `{v!r}` |" for k, v in own.items() if k not in cls.defaults)
+    if cls.models:
+        rows += f"\n| `dynamics` | `{cls.dynamics!r}` (or any of `{cls.models!r}`) |"
+        rows += "".join(
+            f"\n| `{k}` (with `dynamics={m.name!r}`) | `{v!r}` |"
+            for m in dynamics.MODELS.values() if m.name != cls.dynamics
+            for k, v in m.scenario_defaults.items()
+        )  # fmt: skip
     return f"""# {title(scenario)}: `{env_id}`
 
 {about}

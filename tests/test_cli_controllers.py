@@ -28,7 +28,7 @@ def test_simulate_runs_the_scenarios_controller_and_nominal_chooses(capsys):
 
 def test_simulate_refuses_a_controller_the_model_cannot_take(capsys):
     assert rsvo.main(["simulate", "ramp_merge", "--nominal", "rorca"]) == 2
-    assert "not controlled by its velocity" in capsys.readouterr().err
+    assert "ramp_merge.nominal = 'rorca'" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("command", ["simulate", "reproduce"])

@@ -221,7 +221,7 @@ def test_custom_dynamics_is_checked():
     kw = {"starts": [[0.0, 0.0], [5.0, 0.0]], "goals": [[5.0, 5.0], [0.0, 5.0]]}
     with pytest.raises(ValueError, match="custom.dynamics = 'hovercraft'"):
         rsvo_env.parallel_env("custom", dynamics="hovercraft", **kw)
-    with pytest.raises(TypeError, match="a_max is the double integrator's"):
+    with pytest.raises(TypeError, match="custom.a_max is the double_integrator's parameter"):
         rsvo_env.parallel_env("custom", a_max=2.0, **kw)
     with pytest.raises(ValueError, match=r"custom.a_max\[1\] = -1.0"):
         rsvo_env.parallel_env("custom", dynamics="double_integrator", a_max=[1.0, -1.0], **kw)

@@ -205,14 +205,14 @@ def test_crowds_of_100_at_the_training_dt_finish_with_no_agent_orbiting_its_goal
     assert not short, f"agents short of their goals after 100 s, by seed: {short}"
 
 
-def test_move_to_goal_is_kept_by_name_and_rorca_needs_velocity_inputs():
+def test_move_to_goal_is_kept_by_name_and_the_ramp_merge_keeps_its_lane_follower():
     env = rsvo_env.parallel_env("crowd", num_agents=4, nominal="move_to_goal")
     env.reset(seed=0)
     base = env.unwrapped
     s = base.sim.state
     mtg = base.sim.scenario.move_to_goal(s, True, base.sim.scenario.u_max)
     assert np.array_equal(base.sim.nominal_controls(), mtg)
-    with pytest.raises(ValueError, match="nominal = 'rorca' steers velocities"):
+    with pytest.raises(ValueError, match="ramp_merge.nominal = 'rorca'.*lane follower"):
         rsvo_env.parallel_env("ramp_merge", nominal="rorca")
     with pytest.raises(ValueError, match="crowd.nominal = 'orca'"):
         rsvo_env.parallel_env("crowd", nominal="orca")

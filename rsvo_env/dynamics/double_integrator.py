@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rsvo_env.dynamics.model import Dynamics
+from rsvo_env.util.planar import clip_norm
 
 if TYPE_CHECKING:
     from rsvo_env.qp.rows import Rows
@@ -51,6 +52,16 @@ class DoubleIntegrator(Dynamics):
     limit_name = "a_max"
     needs_velocities = True
     per_agent_bodies = True
+    # a_max the acceleration bound; the scripted controller tracks its velocity with gain k_v
+    # (the scene's u_max is then the speed it asks, not a bound)
+    scenario_defaults = {"a_max": 1.0, "k_v": 2.0}
+    scenario_positive = ("a_max", "k_v")
+
+    def track(self, state, velocity, params, limits):
+        """``a = k_v (v_wanted - v)``, its norm clipped to the acceleration bound."""
+        u = params["k_v"] * (velocity - state.velocities)
+        lim = params["a_max"] if limits is None else limits[:, None]
+        return clip_norm(u / lim, 1.0) * lim
 
     def step(self, positions, velocities, u, dt):
         return double_integrator_step(positions, velocities, u, dt)

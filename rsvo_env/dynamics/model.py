@@ -42,12 +42,43 @@ class Dynamics:
     # whether its agents may each have their own body radius (rsvo_env.geometry.bodies), and box
     per_agent_bodies: ClassVar[bool] = False
     per_agent_limits: ClassVar[bool] = True
-    # whether its input is its velocity (a scripted controller may steer it as such: R-ORCA)
-    velocity_input: ClassVar[bool] = False
+    # the scenario parameters it owns (a scene of this model takes them): defaults, and those
+    # that must be > 0
+    scenario_defaults: ClassVar[dict[str, Any]] = {}
+    scenario_positive: ClassVar[tuple[str, ...]] = ()
     # the state it carries beyond positions and velocities, each (E, N) and named as the
     # simulator's State and ``SafetyFilter.filter``'s keywords (the unicycle: "headings"): the
     # core, the filter, the renderer and the global state pass them on by these names
     state_fields: ClassVar[tuple[str, ...]] = ()
+
+    def check_scenario(self, params: dict[str, Any], name: str) -> None:
+        """Checks relating its scenario parameters to the scene's (``name``: the scenario's)."""
+
+    def body_margin(self, params: dict[str, Any]) -> float:
+        """How much the filter enlarges each body (0: bodies as they are). Starts laid out
+        ``4`` margins further apart than the bodies need stay in the filter's safe set."""
+        return 0.0
+
+    def start_bodies(
+        self, starts: NDArray, goals: NDArray, radii: NDArray, params: dict[str, Any]
+    ) -> tuple[NDArray, NDArray]:
+        """The points and radii the filter's safe set holds apart at the start (each agent
+        facing its goal): the positions and bodies themselves, unless the model's rows are on
+        points of its own."""
+        return starts, radii
+
+    def steered(self, state: Any, params: dict[str, Any]) -> tuple[NDArray, NDArray, NDArray]:
+        """The points a scripted controller steers as single integrators, their velocities
+        and the radius each body adds (the positions, velocities and 0 here)."""
+        return state.positions, state.velocities, np.zeros(())
+
+    def track(
+        self, state: Any, velocity: NDArray, params: dict[str, Any], limits: NDArray | None
+    ) -> NDArray[np.float64]:
+        """The inputs (E, N, 2) that give the steered points (:meth:`steered`) the
+        ``velocity`` (E, N, 2) a scripted controller asks, within the input bound (``limits``
+        (N,) each agent's own, or None: the scene's)."""
+        raise NotImplementedError
 
     def step(
         self, positions: NDArray, velocities: NDArray, u: NDArray, dt: float

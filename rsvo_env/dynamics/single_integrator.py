@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rsvo_env.dynamics.model import Dynamics
+from rsvo_env.util.planar import clip_norm
 
 if TYPE_CHECKING:
     from rsvo_env.qp.rows import Rows
@@ -30,7 +31,13 @@ class SingleIntegrator(Dynamics):
     nominal_disk = True
     radius_from_weights = True
     per_agent_bodies = True
-    velocity_input = True
+
+    def track(self, state, velocity, params, limits):
+        """The velocity itself, its norm clipped to each agent's own speed limit if given."""
+        if limits is None:
+            return velocity
+        lim = limits[:, None]
+        return clip_norm(velocity / lim, 1.0) * lim
 
     def step(self, positions, velocities, u, dt):
         # the velocity of a single integrator is the control it integrated

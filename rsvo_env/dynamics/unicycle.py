@@ -65,6 +65,58 @@ class Unicycle(Dynamics):
     limit_name = "u_max"
     state_fields = ("headings",)
     per_agent_bodies = True
+    # the look-ahead distance l and the turn-rate bound
+    scenario_defaults = {"lookahead": 0.2, "w_max": 3.0}
+    scenario_positive = ("lookahead", "w_max")
+
+    def check_scenario(self, params, name):
+        if params["lookahead"] * params["w_max"] >= params["u_max"]:
+            raise ValueError(
+                f"{name}: lookahead * w_max = {params['lookahead'] * params['w_max']!r} must be "
+                f"below u_max = {params['u_max']!r} (the forward speed limit)"
+            )
+
+    def body_margin(self, params):
+        # the rows hold the look-ahead points r_i + r_j + 2 l apart; each is l from its axle
+        return float(params["lookahead"])
+
+    def start_bodies(self, starts, goals, radii, params):
+        l = float(params["lookahead"])
+        seg = goals - starts
+        norm = np.hypot(seg[..., 0], seg[..., 1])[..., None]
+        # facing the goal (the core's start heading: along +x where start and goal coincide)
+        e = np.where(norm > 0, seg / np.where(norm > 0, norm, 1.0), np.array([1.0, 0.0]))
+        return starts + l * e, radii + l
+
+    def steered(self, state, params):
+        """The look-ahead points, their velocities over the last step (the ``c`` each held),
+        bodies enlarged by l."""
+        l = float(params["lookahead"])
+        q = state.positions + l * heading_vectors(state.headings)
+        return q, state.steered_velocities, np.asarray(l)
+
+    def track(self, state, velocity, params, limits):
+        """The look-ahead velocity ``c`` as (v, w) (:meth:`toward`); where ``c`` points behind
+        the robot, it turns in place toward it at ``|c| / l`` (at most ``w_max``): the inverse
+        map would ask to reverse. ``v`` within [0, u_max], ``w`` within the turn-rate bound.
+
+        The turn takes the shorter way, unless the agent has made no progress for a full turn's
+        time ``2 pi / w_max`` (the state's ``no_progress`` clock) and faces more than 60 degrees
+        off ``c``: then it turns left and right by turns, each a full turn at ``w_max``, since
+        the shorter way can be the one a wall or a neighbour blocks (the look-ahead point
+        swings toward it)."""
+        l, w_max = float(params["lookahead"]), float(params["w_max"])
+        v, w = np.moveaxis(self.toward(state.positions, state.headings, velocity, params), -1, 0)
+        behind = v < 0.0
+        speed = np.hypot(velocity[..., 0], velocity[..., 1])
+        w = np.where(behind, np.where(w >= 0.0, 1.0, -1.0) * speed / l, w)
+        if state.no_progress is not None:
+            turns = np.floor(state.no_progress * params["dt"] * w_max / (2.0 * np.pi))
+            # held, and more than 60 degrees off the wanted direction: it must turn
+            swing = (turns >= 1.0) & (v < 0.5 * speed)
+            w = np.where(swing, np.where(turns % 2.0 == 1.0, w_max, -w_max), w)
+        v_max = params["u_max"] if limits is None else limits
+        return np.stack([np.clip(v, 0.0, v_max), np.clip(w, -w_max, w_max)], -1)
 
     def check_box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> None:
         if cfg.lookahead is None or cfg.w_max is None:
@@ -156,13 +208,14 @@ class Unicycle(Dynamics):
         )
 
     def advance_state(self, state, u, dt, params):
-        """The simulator's step: axle positions, headings, and each axle's mean velocity over
-        the step (what the observation reports)."""
-        before = state.positions
-        state.positions, state.headings = unicycle_step(
-            before, state.headings, u, float(params["lookahead"]), dt
-        )
+        """The simulator's step: axle positions, headings, each axle's mean velocity over
+        the step (what the observation reports) and each look-ahead point's (its ``c``)."""
+        before, l = state.positions, float(params["lookahead"])
+        q_before = before + l * heading_vectors(state.headings)
+        state.positions, state.headings = unicycle_step(before, state.headings, u, l, dt)
         state.velocities = (state.positions - before) / dt
+        state.steered_velocities = (state.positions + l * heading_vectors(state.headings)
+                                    - q_before) / dt  # fmt: skip
 
     def to_controls(self, actions, params, planar):
         """Normalised actions in [-1, 1]^2 to (v, w): ``(a_0 v_max, a_1 w_max)``, each

@@ -65,16 +65,27 @@ class Scenario:
     name: ClassVar[str] = ""
     dynamics: ClassVar[str] = "single_integrator"
     defaults: ClassVar[dict[str, Any]] = {}
+    # the models a scene takes by ``dynamics=`` (none: only its own, ``dynamics``)
+    models: ClassVar[tuple[str, ...]] = ()
     # a scenario laid out for a fixed number of agents (None: any number >= 2)
     fixed_agents: ClassVar[int | None] = None
     # parameters that must be > 0 and >= 0 (each subclass adds its own)
     positive: ClassVar[tuple[str, ...]] = ("dt", "goal_tolerance", "safety_radius", "gamma", "k",
-                                           "theta_max")  # fmt: skip
+                                           "theta_max", "u_max")  # fmt: skip
     nonnegative: ClassVar[tuple[str, ...]] = ("rh_trigger", "rh_trigger_factor")
 
     def __init__(self, **kwargs: Any) -> None:
-        params = {**COMMON_DEFAULTS, **self.defaults}
+        self.choose_model(kwargs)
+        defaults = self.all_defaults()
+        params = dict(defaults)
         unknown = sorted(set(kwargs) - set(params))
+        for key in unknown:
+            owner = [m.name for m in dynamics.MODELS.values() if key in m.scenario_defaults]
+            if owner and self.models:
+                raise TypeError(
+                    f"{self.name}.{key} is the {owner[0]}'s parameter: give "
+                    f"dynamics={owner[0]!r} too"
+                )
         if unknown:
             raise TypeError(
                 f"{self.name}() got unknown keyword argument(s) {unknown}; known: {sorted(params)}"
@@ -90,7 +101,7 @@ class Scenario:
         params.update(kwargs)
         self.params = params
         check_count(params["num_agents"], f"{self.name}.num_agents", 2)
-        for key, default in {**COMMON_DEFAULTS, **self.defaults}.items():
+        for key, default in defaults.items():
             # every real-valued parameter must be real and finite (a NaN would only surface
             # later, as an error naming no field)
             if isinstance(default, bool):
@@ -107,7 +118,7 @@ class Scenario:
                     )
                 if not np.isfinite(arr).all():
                     raise ValueError(f"{self.name}.{key} = {params[key]!r} must be finite")
-        for key in self.positive:
+        for key in (*self.positive, *self.model.scenario_positive):
             if key in params:
                 params[key] = check_positive(params[key], f"{self.name}.{key}")
         for key in self.nonnegative:
@@ -125,11 +136,6 @@ class Scenario:
             raise ValueError(
                 f"{self.name}.nominal = {params['nominal']!r}; use one of {NOMINALS}"
             )
-        if params["nominal"] == "rorca" and not self.model.velocity_input:
-            raise ValueError(
-                f"{self.name}.nominal = 'rorca' steers velocities: the {self.model.name} is not "
-                "controlled by its velocity (use nominal='move_to_goal')"
-            )
         for key in ("rorca_tau", "rorca_pad"):
             params[key] = check_positive(params[key], f"{self.name}.{key}")
         check_count(params["max_steps"], f"{self.name}.max_steps", 1)
@@ -137,7 +143,22 @@ class Scenario:
             self.check_theta(params["theta"])
         if params["theta_range"] is not None:
             params["theta_range"] = self._check_theta_range(params["theta_range"])
+        self.model.check_scenario(params, self.name)
         self.check()
+
+    def choose_model(self, kwargs: dict[str, Any]) -> None:
+        """The model ``dynamics`` names, where the scene takes one (else the class's own)."""
+        if self.models:
+            name = kwargs.get("dynamics", type(self).dynamics)
+            if name not in self.models:
+                raise ValueError(f"{self.name}.dynamics = {name!r}; use one of {self.models}")
+            self.dynamics = name  # this scene's model (the class's is the default)
+
+    def all_defaults(self) -> dict[str, Any]:
+        """Every parameter's default: the common ones, the model's (``dynamics`` names it where
+        the scenario takes any model), the scenario's own."""
+        own = {"dynamics": type(self).dynamics} if self.models else {}
+        return {**COMMON_DEFAULTS, **self.model.scenario_defaults, **self.defaults, **own}
 
     def check(self) -> None:
         """Checks that relate parameters of a scenario to one another (a subclass's own)."""
@@ -165,6 +186,18 @@ class Scenario:
     @property
     def limit_name(self) -> str:
         return self.model.limit_name
+
+    @property
+    def speed(self) -> float:
+        """The speed the scripted controller asks (``u_max``: a bound for the single integrator
+        and the unicycle, the cruising speed of the double integrator)."""
+        return float(self.params["u_max"])
+
+    @property
+    def body_margin(self) -> float:
+        """How much the filter enlarges each body (the unicycle's look-ahead, else 0): layouts
+        set starts ``4`` margins further apart."""
+        return self.model.body_margin(self.params)
 
     @property
     def num_agents(self) -> int:
@@ -253,19 +286,28 @@ class Scenario:
     def nominal(self, state: Any, right_hand: bool = True) -> NDArray[np.float64]:
         """Scripted nominal controls (E, N, 2) in physical units: move-to-goal (paper, Sec. V-A)
         plus the right-hand rule (unless ``right_hand`` is False), or R-ORCA's velocity toward
-        it (``nominal="rorca"``)."""
-        return self.steer(state, self.move_to_goal(state, right_hand, self.u_max))
+        it (``nominal="rorca"``), as the model's inputs (:meth:`command`)."""
+        return self.command(state, self.move_to_goal(state, right_hand, self.speed))
+
+    def command(self, state: Any, preferred: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The scripted controller's inputs from the ``preferred`` velocities: the model's
+        inputs (``Dynamics.track``) that give its steered points the velocity of :meth:`steer`."""
+        return self.model.track(state, self.steer(state, preferred), self.params,
+                                self.agent_limits)  # fmt: skip
 
     def steer(self, state: Any, preferred: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The scripted controller's command from the ``preferred`` velocities: themselves, or
-        with ``nominal="rorca"`` the R-ORCA velocity closest to them (``rsvo_env.control.rorca``,
-        bodies ``rorca_pad`` times the agents', horizon ``rorca_tau``)."""
+        """The velocity the scripted controller asks from the ``preferred`` ones: themselves,
+        or with ``nominal="rorca"`` the R-ORCA velocity closest to them
+        (``rsvo_env.control.rorca``) for the model's steered points (``Dynamics.steered``: the
+        unicycle's look-ahead points), bodies ``rorca_pad`` times theirs, horizon
+        ``rorca_tau``."""
         p = self.params
         if p["nominal"] != "rorca":
             return preferred
+        points, velocities, extra = self.model.steered(state, p)
         return rorca.rorca_velocities(
-            state.positions, state.velocities, preferred, p["rorca_pad"] * self.radii,
-            state.theta, state.weighting, self.u_max, p["dt"], p["rorca_tau"],
+            points, velocities, preferred, p["rorca_pad"] * (self.radii + extra),
+            state.theta, state.weighting, self.speed, p["dt"], p["rorca_tau"],
             rules=rorca.Rules(
                 parked=state.at_goal, goals=state.goals,
                 held=stall.held(state.no_progress, p["dt"], rorca.HOLD_SECONDS),

@@ -19,19 +19,22 @@ if TYPE_CHECKING:
 
 def check_scene(scenario: Scenario, starts: NDArray, goals: NDArray, capsules: NDArray) -> None:
     """Starts in the safe set (every pair at least ``r_i + r_j`` apart, every body clear of
-    every obstacle) and no goal inside an obstacle."""
+    every obstacle; for the unicycle its look-ahead point, facing its goal, with the body
+    enlarged by the look-ahead) and no goal inside an obstacle (nor within two look-aheads)."""
     radii = scenario.radii
     n = len(starts)
+    points, grown = scenario.model.start_bodies(starts, goals, radii, scenario.params)
+    what = "look-ahead points" if points is not starts else "starting positions"
     if n >= 2:
-        ratio = contact(starts[None], radii)[0]  # O(N) on a grid
+        ratio = contact(points[None], grown)[0]  # O(N) on a grid
         i = int(np.argmin(ratio))
         if ratio[i] < 1.0:
-            d = np.linalg.norm(starts - starts[i], axis=1)
-            others = np.where(np.arange(n) == i, np.inf, d / (radii[i] + radii))
+            d = np.linalg.norm(points - points[i], axis=1)
+            others = np.where(np.arange(n) == i, np.inf, d / (grown[i] + grown))
             j = int(np.argmin(others))
             raise ValueError(
-                f"starting positions of agents {i} and {j} overlap: distance {float(d[j])!r} "
-                f"< {float(radii[i] + radii[j])!r}, the sum of their radii (h < 0)"
+                f"{what} of agents {i} and {j} overlap: distance {float(d[j])!r} "
+                f"< {float(grown[i] + grown[j])!r}, the sum of their radii (h < 0)"
             )
     if len(capsules) == 0:
         return
@@ -40,13 +43,14 @@ def check_scene(scenario: Scenario, starts: NDArray, goals: NDArray, capsules: N
         raise ValueError(
             f"{scenario.name}: obstacles have shape {capsules.shape}, expected {expected}"
         )
-    for what, points, margin in (("start", starts, radii), ("goal", goals, radii)):
-        c = nearest_points(points, capsules)
-        gap = np.linalg.norm(points[:, None, :] - c, axis=-1) - capsules[:, 4] - margin[:, None]
+    reach = radii + 2.0 * scenario.body_margin  # a look-ahead point's body at the goal
+    for what, at, margin in (("start", points, grown), ("goal", goals, reach)):
+        c = nearest_points(at, capsules)
+        gap = np.linalg.norm(at[:, None, :] - c, axis=-1) - capsules[:, 4] - margin[:, None]
         i, o = np.unravel_index(int(np.argmin(gap)), gap.shape)
         if gap[i, o] < 0:
             raise ValueError(
-                f"the {what} of agent {i}, {points[i].tolist()}, is inside obstacle {o} "
+                f"the {what} of agent {i}, {at[i].tolist()}, is inside obstacle {o} "
                 f"(its body would overlap it by {float(-gap[i, o])!r})"
             )
 

@@ -7,6 +7,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from rsvo_env import dynamics
 from rsvo_env.scenarios.base import Scenario
 
 
@@ -52,9 +53,14 @@ def _accept(cand, pts, count, spacing, side):
 
 
 class Crowd(Scenario):
-    """N agents with seeded random starts and goals in a square: the stress and scaling case."""
+    """N agents with seeded random starts and goals in a square: the stress and scaling case.
+    Starts and goals are ``spacing_factor R`` apart in a square of side
+    ``side_factor sqrt(N) R``, both grown by the filter's body margin ``m`` (the unicycle's
+    look-ahead): ``+ 4 m`` and ``R + 2 m`` in place of ``R``, so that the look-ahead points
+    start in the filter's safe set whatever the headings."""
 
     name = "crowd"
+    models = dynamics.NAMES
     positive = (*Scenario.positive, "spacing_factor", "side_factor")
     defaults = {
         "num_agents": 12,
@@ -72,14 +78,19 @@ class Crowd(Scenario):
 
     @property
     def side(self) -> float:
-        return self.params["side_factor"] * np.sqrt(self.num_agents) * self.params["safety_radius"]
+        R, m = self.params["safety_radius"], self.body_margin
+        return self.params["side_factor"] * np.sqrt(self.num_agents) * (R + 2.0 * m)
+
+    @property
+    def spacing(self) -> float:
+        """How far apart starts (and goals) are at least."""
+        return self.params["spacing_factor"] * self.params["safety_radius"] + 4.0 * self.body_margin
 
     def _spread(self, rng: np.random.Generator) -> NDArray[np.float64]:
         """N points uniform in the square, pairwise >= spacing apart: dart throwing in batches,
         each candidate accepted in draw order (so the layout is a function of the seed alone)
         against a grid of accepted points, O(N) per batch."""
-        n, side = self.num_agents, self.side
-        spacing = self.params["spacing_factor"] * self.params["safety_radius"]
+        n, side, spacing = self.num_agents, self.side, self.spacing
         pts = np.empty((n, 2))
         count = 0
         for _ in range(10000):

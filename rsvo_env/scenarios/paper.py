@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from rsvo_env import dynamics
 from rsvo_env.control import nominal
 from rsvo_env.scenarios.base import Scenario
 from rsvo_env.util.validation import check_count
@@ -61,6 +62,7 @@ class CircularSwap(Scenario):
     """N agents on a circle, each to the antipodal point (paper, Sec. V-C, Figs. 5-7)."""
 
     name = "circular_swap"
+    models = dynamics.NAMES
     positive = (*Scenario.positive, "circle_radius")
     defaults = {
         "num_agents": 6,
@@ -120,6 +122,11 @@ class RampMerge(Scenario):
     }
 
     def check(self) -> None:
+        if self.params["nominal"] != "move_to_goal":
+            raise ValueError(
+                f"ramp_merge.nominal = {self.params['nominal']!r}: the ramp merge's scripted "
+                "controller is the paper's lane follower (nominal='move_to_goal' names it)"
+            )
         merge_y, finish = self.params["merge_point"][1], self.params["finish_y"]
         if not finish > merge_y:
             raise ValueError(

@@ -12,12 +12,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from rsvo_env import dynamics
 from rsvo_env.control import nominal
 from rsvo_env.geometry.bodies import check_per_agent
 from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.scenarios.base import Scenario
 from rsvo_env.scenarios.checks import check_scene
-from rsvo_env.util import planar
 from rsvo_env.util.validation import check_count, real_array
 
 BASE = {
@@ -45,37 +45,27 @@ def _points(value: Any, name: str, n: int | None) -> NDArray[np.float64]:
 class Scene(Scenario):
     """The user's own scene from arrays: ``starts``, ``goals`` (N, 2), ``radii`` (N,) body
     radii (default ``safety_radius / 2``), obstacles (``circles`` (C, 3), ``walls`` (W, 2, 2) of
-    ``thickness``), ``dynamics`` ``"single_integrator"`` (``u_max`` the speed limit, one or one
-    per agent) or ``"double_integrator"`` (``a_max`` the acceleration limit, one or one per
-    agent; the scripted controller tracks the move-to-goal velocity of speed ``u_max`` with gain
-    ``k_v``). Validated on construction: an overlapping start, a start or goal inside an
-    obstacle raises naming the agent."""
+    ``thickness``), any model by ``dynamics`` with its input bound one or one per agent
+    (``u_max`` the speed limit of the single integrator and the unicycle, ``a_max`` the
+    acceleration limit of the double integrator, whose scripted controller tracks the
+    move-to-goal velocity of speed ``u_max`` with gain ``k_v``). Validated on construction: an
+    overlapping start, a start or goal inside an obstacle raises naming the agent."""
 
     name = "custom"
+    models = dynamics.NAMES
     defaults = {**BASE, "num_agents": 2, "starts": None, "goals": None, "radii": None,
-                "circles": None, "walls": None, "thickness": 0.1,
-                "dynamics": "single_integrator", "a_max": 1.0, "k_v": 2.0}  # fmt: skip
+                "circles": None, "walls": None, "thickness": 0.1}  # fmt: skip
     nonnegative = (*Scenario.nonnegative, "thickness")
-    positive = (*Scenario.positive, "u_max", "k_v")
-    MODELS = ("single_integrator", "double_integrator")
 
     def __init__(self, **kwargs: Any) -> None:
         if kwargs.get("starts") is None or kwargs.get("goals") is None:
             raise ValueError("custom: give starts and goals, (N, 2) each")
         starts = _points(kwargs["starts"], "custom.starts", None)
         kwargs.setdefault("num_agents", len(starts))
-        name = kwargs.get("dynamics", "single_integrator")
-        if name not in self.MODELS:
-            raise ValueError(
-                f"custom.dynamics = {name!r}; use one of {self.MODELS} (unicycles: the "
-                "unicycle_crowd scenario)"
-            )
-        self.dynamics = name  # this scene's model (the class's is the default)
+        self.choose_model(kwargs)
         # the input bound: one, or one per agent (the parameter is then the largest, for the
         # bounds); the single integrator's is u_max, the double integrator's a_max
         limit = self.model.limit_name
-        if limit != "a_max" and "a_max" in kwargs:
-            raise TypeError("custom.a_max is the double integrator's: give dynamics too")
         self._limits = None
         if np.ndim(kwargs.get(limit, 0.0)) == 1:
             self._limits = check_per_agent(kwargs[limit], f"custom.{limit}", (len(starts),))
@@ -99,20 +89,6 @@ class Scene(Scenario):
     @property
     def agent_limits(self) -> NDArray[np.float64] | None:
         return self._limits
-
-    def nominal(self, state, right_hand=True):
-        p = self.params
-        if self.model.needs_velocities:
-            # an acceleration input: track the move-to-goal velocity, a = k_v (v_goal - v)
-            v_goal = self.move_to_goal(state, right_hand, p["u_max"])
-            u = p["k_v"] * (v_goal - state.velocities)
-            lim = p["a_max"] if self._limits is None else self._limits[:, None]
-            return planar.clip_norm(u / lim, 1.0) * lim
-        u = super().nominal(state, right_hand)
-        if self._limits is None:
-            return u
-        lim = self._limits[:, None]
-        return planar.clip_norm(u / lim, 1.0) * lim  # each agent's own speed limit
 
     @property
     def num_obstacles(self) -> int:
@@ -141,15 +117,18 @@ class Doorway(Scenario):
     bottleneck of crowd simulators). The scripted controller heads for the gap, then the goal."""
 
     name = "doorway"
+    models = dynamics.NAMES
     positive = (*Scenario.positive, "gap", "wall_half_length", "thickness", "depth")
     defaults = {**BASE, "num_agents": 8, "gap": 4.0, "wall_half_length": 12.0, "thickness": 0.4,
                 "depth": 6.0, "max_steps": 4000, "nominal": "rorca"}  # fmt: skip
 
     def check(self) -> None:
         p = self.params
-        if p["gap"] <= p["safety_radius"]:
+        need = p["safety_radius"] + 2.0 * self.body_margin  # the filter's bodies
+        if p["gap"] <= need:
             raise ValueError(
                 f"doorway.gap = {p['gap']!r} must exceed safety_radius = {p['safety_radius']!r}"
+                + (f" + 2 lookahead = {need!r}" if self.body_margin else "")
             )
 
     @property
@@ -171,7 +150,8 @@ class Doorway(Scenario):
 
     def initial_state(self, rng):
         p, n = self.params, self.num_agents
-        spacing = 2.5 * p["safety_radius"]  # room to pass between agents parked at goals
+        # room to pass between agents parked at goals (the filter's bodies: enlarged)
+        spacing = 2.5 * p["safety_radius"] + 4.0 * self.body_margin
         left = (n + 1) // 2
         pts = []
         for count, side in ((left, -1.0), (n - left, 1.0)):
@@ -196,8 +176,8 @@ class Doorway(Scenario):
         mouth = np.stack([side * p["safety_radius"], lane], -1)
         target = np.where(crossed[..., None], goals, mouth)
         rh = state.rh_active if self.turns(right_hand) else None
-        return self.steer(
-            state, nominal.move_to_goal(x, target, p["k"], self.u_max, rh, p["rh_angle_deg"])
+        return self.command(
+            state, nominal.move_to_goal(x, target, p["k"], self.speed, rh, p["rh_angle_deg"])
         )
 
     def arena(self):
@@ -213,6 +193,7 @@ class ObstacleField(Scenario):
     episode clear of every start and goal."""
 
     name = "obstacle_field"
+    models = dynamics.NAMES
     positive = (*Scenario.positive, "side")
     defaults = {**BASE, "num_agents": 10, "side": 20.0, "num_circles": 8,
                 "circle_radius": (0.5, 1.5), "max_steps": 3000, "nominal": "rorca"}  # fmt: skip
@@ -235,10 +216,11 @@ class ObstacleField(Scenario):
         p, n = self.params, self.num_agents
         s, R = p["side"], p["safety_radius"]
         ys = np.linspace(-s / 2, s / 2, n)
-        if n > 1 and ys[1] - ys[0] < 1.2 * R:
+        spacing = 1.2 * R + 4.0 * self.body_margin
+        if n > 1 and ys[1] - ys[0] < spacing:
             raise ValueError(
-                f"obstacle_field: {n} agents do not fit on an edge of side {s} at 1.2 safety "
-                "radii apart; raise side"
+                f"obstacle_field: {n} agents do not fit on an edge of side {s} at {spacing!r} "
+                "apart (1.2 safety radii, and 4 look-ahead distances for unicycles); raise side"
             )
         start = np.c_[np.full(n, -s / 2 - R), ys]
         goals = np.c_[np.full(n, s / 2 + R), ys[rng.permutation(n)]]

@@ -207,6 +207,7 @@ class Simulator:
             self.rngs[e] = rng
             s.obstacles[e] = caps
             s.positions[e], s.velocities[e], s.goals[e], s.starts[e] = start, vel, goals, start
+            s.steered_velocities[e] = vel
             s.theta[e] = th
             s.weighting[e] = weighting
         self.weights.update(idx, s.theta, s.weighting)

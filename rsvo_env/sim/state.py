@@ -45,6 +45,9 @@ class State:
     contact: NDArray[np.float64] | None = None
     # (E, N) headings (radians), for a model that has them (the unicycle)
     headings: NDArray[np.float64] | None = None
+    # (E, N, 2) each steered point's velocity over the last step, where a model steers points
+    # other than its positions (the unicycle's look-ahead points, ``Dynamics.steered``)
+    steered_velocities: NDArray[np.float64] | None = None
     # (E, N) steps since each agent last came closer to its goal (the core's progress clock,
     # rsvo_env.control.stall), a copy per step; R-ORCA reads it
     # (rsvo_env.control.rorca.HOLD_SECONDS)
@@ -68,5 +71,6 @@ class State:
             weighting=["asymmetric"] * E,
             obstacles=np.zeros((E, num_obstacles, 5)),
             headings=np.zeros((E, n)),
+            steered_velocities=np.zeros((E, n, 2)),
             no_progress=np.zeros((E, n), dtype=np.int64),
         )
