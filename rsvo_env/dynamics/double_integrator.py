@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rsvo_env.dynamics.model import Dynamics
-from rsvo_env.util.planar import clip_norm
+from rsvo_env.util.planar import clip_each
 
 if TYPE_CHECKING:
     from rsvo_env.qp.rows import Rows
@@ -60,8 +60,7 @@ class DoubleIntegrator(Dynamics):
     def track(self, state, velocity, params, limits):
         """``a = k_v (v_wanted - v)``, its norm clipped to the acceleration bound."""
         u = params["k_v"] * (velocity - state.velocities)
-        lim = params["a_max"] if limits is None else limits[:, None]
-        return clip_norm(u / lim, 1.0) * lim
+        return clip_each(u, params["a_max"] if limits is None else limits)
 
     def step(self, positions, velocities, u, dt):
         return double_integrator_step(positions, velocities, u, dt)

@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rsvo_env.dynamics.model import Dynamics
-from rsvo_env.util.planar import clip_norm
+from rsvo_env.util.planar import clip_each
 
 if TYPE_CHECKING:
     from rsvo_env.qp.rows import Rows
@@ -34,10 +34,7 @@ class SingleIntegrator(Dynamics):
 
     def track(self, state, velocity, params, limits):
         """The velocity itself, its norm clipped to each agent's own speed limit if given."""
-        if limits is None:
-            return velocity
-        lim = limits[:, None]
-        return clip_norm(velocity / lim, 1.0) * lim
+        return velocity if limits is None else clip_each(velocity, limits)
 
     def step(self, positions, velocities, u, dt):
         # the velocity of a single integrator is the control it integrated

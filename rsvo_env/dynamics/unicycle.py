@@ -82,11 +82,8 @@ class Unicycle(Dynamics):
 
     def start_bodies(self, starts, goals, radii, params):
         l = float(params["lookahead"])
-        seg = goals - starts
-        norm = np.hypot(seg[..., 0], seg[..., 1])[..., None]
-        # facing the goal (the core's start heading: along +x where start and goal coincide)
-        e = np.where(norm > 0, seg / np.where(norm > 0, norm, 1.0), np.array([1.0, 0.0]))
-        return starts + l * e, radii + l
+        seg = goals - starts  # facing the goal, as the core starts it
+        return starts + l * heading_vectors(np.arctan2(seg[..., 1], seg[..., 0])), radii + l
 
     def steered(self, state, params):
         """The look-ahead points, their velocities over the last step (the ``c`` each held),

@@ -195,9 +195,15 @@ class Scenario:
 
     @property
     def body_margin(self) -> float:
-        """How much the filter enlarges each body (the unicycle's look-ahead, else 0): layouts
-        set starts ``4`` margins further apart."""
+        """How much the filter enlarges each body (the unicycle's look-ahead, else 0)."""
         return self.model.body_margin(self.params)
+
+    @property
+    def start_clearance(self) -> float:
+        """How much further apart layouts set starts: ``4`` body margins, since each filtered
+        point lies up to a margin from its body's centre, whatever the heading, and the
+        filter holds the points the two margins further apart."""
+        return 4.0 * self.body_margin
 
     @property
     def num_agents(self) -> int:

@@ -84,7 +84,7 @@ class Crowd(Scenario):
     @property
     def spacing(self) -> float:
         """How far apart starts (and goals) are at least."""
-        return self.params["spacing_factor"] * self.params["safety_radius"] + 4.0 * self.body_margin
+        return self.params["spacing_factor"] * self.params["safety_radius"] + self.start_clearance
 
     def _spread(self, rng: np.random.Generator) -> NDArray[np.float64]:
         """N points uniform in the square, pairwise >= spacing apart: dart throwing in batches,

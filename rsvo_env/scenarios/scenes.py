@@ -151,7 +151,7 @@ class Doorway(Scenario):
     def initial_state(self, rng):
         p, n = self.params, self.num_agents
         # room to pass between agents parked at goals (the filter's bodies: enlarged)
-        spacing = 2.5 * p["safety_radius"] + 4.0 * self.body_margin
+        spacing = 2.5 * p["safety_radius"] + self.start_clearance
         left = (n + 1) // 2
         pts = []
         for count, side in ((left, -1.0), (n - left, 1.0)):
@@ -216,7 +216,7 @@ class ObstacleField(Scenario):
         p, n = self.params, self.num_agents
         s, R = p["side"], p["safety_radius"]
         ys = np.linspace(-s / 2, s / 2, n)
-        spacing = 1.2 * R + 4.0 * self.body_margin
+        spacing = 1.2 * R + self.start_clearance
         if n > 1 and ys[1] - ys[0] < spacing:
             raise ValueError(
                 f"obstacle_field: {n} agents do not fit on an edge of side {s} at {spacing!r} "

@@ -81,6 +81,13 @@ def within(
     return _within(positions, as_shape(targets, positions.shape), float(limit))
 
 
+def clip_each(u: NDArray[np.float64], limit: float | NDArray) -> NDArray[np.float64]:
+    """Each agent's row of u (..., N, 2) clipped to its own norm bound: ``limit`` one for all,
+    or (N,) one per agent."""
+    lim = limit if np.ndim(limit) == 0 else np.asarray(limit)[:, None]
+    return clip_norm(u / lim, 1.0) * lim
+
+
 def clip_norm(u: NDArray[np.float64], limit: float, scale: float = 1.0) -> NDArray[np.float64]:
     """Scale each row of u (..., 2) down to norm <= limit (directions kept), then multiply by
     ``scale``; without overflow: a huge finite row such as (1e200, 0) keeps its direction."""
