@@ -95,7 +95,7 @@ def motion(n, barrier, steps, seed, dt=0.05, gamma_dt=0.1):
 def ramp_merge():
     rows = []
     merge_y = 70.0
-    for barrier in ("backup", "braking"):
+    for barrier in ("segment", "backup", "braking"):
         for case, theta in CASES.items():
             out = run("ramp_merge", theta=theta, barrier=barrier, seed=0)
             t = [first_step(out["trajectory"], i, merge_y) for i in range(2)]
@@ -111,9 +111,12 @@ def merge_section(merges: list) -> list[str]:
         "## 3. Ramp merge (paper, Sec. V-B), scenario defaults",
         "",
         "The step each vehicle passes the merge point (y = 70 m) and the closest gap"
-        " (safety distance 5 m). The vehicles start at 15 m/s, 41 m apart: outside the backup"
-        " barrier's safe set (h = -9.8 m), so under it they first recover (the sign-aware split"
-        " of the deficit lets the egoist go first); the scenario keeps the braking barrier.",
+        " (safety distance 5 m). The vehicles start at 15 m/s, 41 m apart: inside the"
+        " stopping-segment barrier's safe set (h = 20.4 m), the scenario's default since issue"
+        " 48, so every QP is feasible and no sample comes below 5 m; outside the backup"
+        " barrier's (h = -9.8 m), so under it they first recover (the sign-aware split of the"
+        " deficit lets the egoist go first). The paper's reproduction runs the braking barrier"
+        " by name.",
         "",
         "| barrier | case | first through | V1 step | V2 step | closest gap [m] |"
         " infeasible agent-steps |",

@@ -66,9 +66,11 @@ def track(p, v, goals, a, v_max, k_v=2.0):
     return np.clip(k_v * (v_des - v), -a[..., None], a[..., None])
 
 
-def drive(flt, p, v, goals, radii, a, theta, dt, steps, v_max, I, J, capsules=None):
+def drive(flt, p, v, goals, radii, a, theta, dt, steps, v_max, I, J, capsules=None, hs=None):
     """Run the filtered crowd: the worst pair distance over r_i + r_j, the worst obstacle
-    clearance over r_i, infeasible agent-steps while every h >= 0, and agent-steps in all."""
+    clearance over r_i, infeasible agent-steps while every h >= 0, and agent-steps in all.
+    ``hs``: the barrier's (pair h, obstacle h) functions (default: the backup barrier's)."""
+    pair_h, obstacle_h = hs or (globals()["pair_h"], globals()["obstacle_h"])
     worst, worst_o, infeasible = np.inf, np.inf, 0
     kw = {} if capsules is None else {"obstacles": capsules}
     for _ in range(steps):
@@ -86,3 +88,26 @@ def drive(flt, p, v, goals, radii, a, theta, dt, steps, v_max, I, J, capsules=No
                 worst_o, float(obstacle_h(p, v, radii, a, dt, capsules.capsules)[1].min())
             )
     return worst, worst_o, infeasible, p, v
+
+
+def cluster(rng, family, E, k, scale):
+    """E clusters of k agents (E, k, 2): positions, velocities, radii, limits; ``family``:
+    head-on, crossing, overtaking or converging (k agents from a circle toward its centre)."""
+    radii = rng.uniform(0.2, 2.0, (E, k)) * scale
+    a = rng.uniform(0.5, 3.0, (E, k)) * scale
+    speed = rng.uniform(0.0, 8.0, (E, k)) * scale
+    if family == "converging":
+        ang = np.sort(rng.uniform(0, 2 * np.pi, (E, k)), axis=1)
+        u = np.stack([np.cos(ang), np.sin(ang)], -1)
+        p = u * 10.0 * scale
+        heading = -u + rng.normal(0, 0.3, (E, k, 2))
+    else:
+        side = {"head-on": [[-1, 0], [1, 0]], "crossing": [[-1, 0], [0, -1]],
+                "overtaking": [[-1, 0], [1, 0]]}[family]  # fmt: skip
+        p = np.broadcast_to(np.array(side, float) * 10.0 * scale, (E, 2, 2)).copy()
+        heading = -np.array(side, float) + rng.normal(0, 0.05, (E, 2, 2))
+        if family == "overtaking":  # both move right, the one behind faster
+            heading = np.broadcast_to([1.0, 0.0], (E, 2, 2)) + rng.normal(0, 0.05, (E, 2, 2))
+            speed[:, 0] += speed[:, 1]
+    heading /= np.linalg.norm(heading, axis=-1, keepdims=True)
+    return p, heading * speed[..., None], radii, a

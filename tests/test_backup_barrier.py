@@ -6,7 +6,7 @@ all-pairs one."""
 
 import numpy as np
 import pytest
-from backup_states import drive, into_safe_set, obstacle_h, pair_h, safe_crowd
+from backup_states import cluster, drive, into_safe_set, obstacle_h, pair_h, safe_crowd
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -25,7 +25,7 @@ unit = st.floats(0.0, 1.0)
 def config(dt, gamma_dt, scale=1.0, **kw):
     return FilterConfig(
         gamma=gamma_dt / dt, safety_radius=scale, u_max=3.0 * scale, dt=dt,
-        dynamics="double_integrator", **kw,
+        dynamics="double_integrator", barrier="backup", **kw,
     )  # fmt: skip
 
 
@@ -72,29 +72,6 @@ def test_the_trust_radius_inverts_the_remainder(tau, c, dt):
 
 
 # --- every QP feasible at h = 0 -------------------------------------------------------------
-
-
-def cluster(rng, family, E, k, scale):
-    """E clusters of k agents (E, k, 2): positions, velocities, radii, limits; ``family``:
-    head-on, crossing, overtaking or converging (k agents from a circle toward its centre)."""
-    radii = rng.uniform(0.2, 2.0, (E, k)) * scale
-    a = rng.uniform(0.5, 3.0, (E, k)) * scale
-    speed = rng.uniform(0.0, 8.0, (E, k)) * scale
-    if family == "converging":
-        ang = np.sort(rng.uniform(0, 2 * np.pi, (E, k)), axis=1)
-        u = np.stack([np.cos(ang), np.sin(ang)], -1)
-        p = u * 10.0 * scale
-        heading = -u + rng.normal(0, 0.3, (E, k, 2))
-    else:
-        side = {"head-on": [[-1, 0], [1, 0]], "crossing": [[-1, 0], [0, -1]],
-                "overtaking": [[-1, 0], [1, 0]]}[family]  # fmt: skip
-        p = np.broadcast_to(np.array(side, float) * 10.0 * scale, (E, 2, 2)).copy()
-        heading = -np.array(side, float) + rng.normal(0, 0.05, (E, 2, 2))
-        if family == "overtaking":  # both move right, the one behind faster
-            heading = np.broadcast_to([1.0, 0.0], (E, 2, 2)) + rng.normal(0, 0.05, (E, 2, 2))
-            speed[:, 0] += speed[:, 1]
-    heading /= np.linalg.norm(heading, axis=-1, keepdims=True)
-    return p, heading * speed[..., None], radii, a
 
 
 def at_zero(p, v, radii, a, dt):
@@ -289,9 +266,8 @@ def test_continuous_time_rows_admit_the_backup():
             assert (lhs <= rows.flat_b + 1e-12 * (1 + np.abs(rows.flat_b))).all()
 
 
-def test_backup_is_the_default_and_walls_need_it():
-    cfg = FilterConfig(dynamics="double_integrator", dt=0.05)
-    assert cfg.barrier == "backup"
+def test_backup_takes_walls_and_the_braking_barrier_does_not():
+    cfg = FilterConfig(dynamics="double_integrator", dt=0.05, barrier="backup")
     from rsvo_env.scenarios.scenes import Scene
 
     kw = {"starts": [[0, 0], [10, 0]], "goals": [[10, 0], [0, 0]], "dynamics": "double_integrator",

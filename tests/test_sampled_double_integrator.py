@@ -91,7 +91,11 @@ def random_merge(rng):
     physics, not the filter."""
     while True:
         dt, params = draw_merge(rng)
-        env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("ramp_merge", **params))
+        # the braking barrier's sampled-data row under test (the scenario's default is the
+        # stopping-segment barrier)
+        env = wrappers.RCBFSafetyFilter(
+            rsvo_env.parallel_env("ramp_merge", **params), barrier="braking"
+        )
         env.reset(seed=0)
         if merge_h(env.unwrapped.world, params["safety_radius"], params["a_max"]) >= 0:
             return env, params

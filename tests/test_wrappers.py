@@ -168,8 +168,10 @@ def test_callable_weighting_is_validated():
 # ---- ramp merge ----
 
 
-def merge_order(theta, split="capability"):
-    env = filtered("ramp_merge", split=split)
+def merge_order(theta, split="capability", barrier="braking"):
+    """Who passes the merge point first, under the paper's braking barrier unless told."""
+    kw = {} if barrier is None else {"barrier": barrier}
+    env = filtered("ramp_merge", split=split, **kw)
     env.reset(seed=0, options={"theta": theta})
     base = env.unwrapped
     passed = [None, None]
@@ -197,6 +199,15 @@ def test_equal_theta_keeps_the_safety_distance():
 def test_paper_split_makes_the_egoist_yield(theta, egoist):
     passed, _ = merge_order(theta, split="paper")
     assert passed[egoist] > passed[1 - egoist], passed
+
+
+@pytest.mark.parametrize("theta,egoist", [([1.0, 4.0], 0), ([4.0, 1.0], 1)])
+def test_the_ramp_merge_default_barrier_lets_the_egoist_first(theta, egoist):
+    """The scenario's default, the stopping-segment barrier (its start lies in that safe set):
+    the egoist first, no infeasible step, never below the safety distance."""
+    passed, m = merge_order(theta, barrier=None)
+    assert passed[egoist] < passed[1 - egoist], passed
+    assert m["n_infeasible"] == 0 and m["min_distance"] >= 5.0
 
 
 # ---- joint control ----

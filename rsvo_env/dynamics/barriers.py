@@ -26,9 +26,9 @@ from rsvo_env.qp.rows import PairFlags, Rows, finish, support
 
 __all__ = ["Rows", "support"]
 
-# "backup" (rsvo_env.dynamics.backup_barrier) is the double integrator's default; "braking" and
-# "hocbf" are kept by name for comparison
-BARRIERS = ("backup", "braking", "hocbf")
+# "segment" (rsvo_env.dynamics.segment_barrier) is the double integrator's default; "backup" (the
+# stopping disk), "braking" and "hocbf" are kept by name for comparison
+BARRIERS = ("segment", "backup", "braking", "hocbf")
 SPLITS = ("capability", "sign_aware", "paper")
 
 
@@ -258,7 +258,7 @@ def double_integrator_rows(
     if barrier not in ("braking", "hocbf"):
         raise ValueError(
             f"barrier {barrier!r} has no pair rows here; use 'braking' or 'hocbf' "
-            "('backup': rsvo_env.dynamics.backup_barrier.backup_rows)"
+            "('segment', 'backup': their modules' rows)"
         )
     if split not in SPLITS:
         raise ValueError(f"split {split!r} is unknown; use one of {SPLITS}")

@@ -42,10 +42,25 @@ def check_sampled_pairs(dt: float, bodies: Any, I: NDArray, J: NDArray) -> None:
         )
 
 
+# the barriers whose rows are met by every agent's backup at once (docs/double_integrator.md)
+BACKED = ("segment", "backup")
+
+
+def _backed(barrier: str):
+    """The rows and culling radii of a barrier of ``BACKED``."""
+    if barrier == "segment":
+        from rsvo_env.dynamics.segment_barrier import segment_radii, segment_rows
+
+        return segment_rows, segment_radii
+    from rsvo_env.dynamics.backup_barrier import backup_radii, backup_rows
+
+    return backup_rows, backup_radii
+
+
 class DoubleIntegrator(Dynamics):
-    """The backup barrier's rows (``rsvo_env.dynamics.backup_barrier``, the default: every QP
-    feasible
-    while every h >= 0, walls included), or the braking or HOCBF barrier's, split by
+    """The stopping-segment barrier's rows (``rsvo_env.dynamics.segment_barrier``, the default)
+    or the backup barrier's (``backup_barrier``, the stopping disk): with either every QP is
+    feasible while every h >= 0, walls included; or the braking or HOCBF barrier's, split by
     responsibility (``FilterConfig.barrier``, ``split``)."""
 
     name = "double_integrator"
@@ -54,7 +69,7 @@ class DoubleIntegrator(Dynamics):
     per_agent_bodies = True
     # a_max the acceleration bound; the scripted controller tracks its velocity with gain k_v
     # (the scene's u_max is then the speed it asks, not a bound)
-    scenario_defaults = {"a_max": 1.0, "k_v": 2.0}
+    scenario_defaults = {"a_max": 1.0, "k_v": 4.0}
     scenario_positive = ("a_max", "k_v")
 
     def track(self, state, velocity, params, limits):
@@ -66,8 +81,9 @@ class DoubleIntegrator(Dynamics):
         return double_integrator_step(positions, velocities, u, dt)
 
     def takes_walls(self, barrier: str) -> bool:
-        # the braking barrier's proof covers circles only; the backup barrier's any capsule
-        return barrier == "backup"
+        # the braking barrier's proof covers circles only; the segment and backup barriers' any
+        # capsule
+        return barrier in BACKED
 
     def check_box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> None:
         if cfg.barrier == "hocbf":
@@ -77,7 +93,7 @@ class DoubleIntegrator(Dynamics):
                 f"FilterConfig: the {cfg.barrier} barrier needs u_min < 0 < u_max, got "
                 f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
             )
-        if cfg.barrier == "backup":  # exact in sampled time at any dt
+        if cfg.barrier in BACKED:  # exact in sampled time at any dt
             return
         from rsvo_env.dynamics.barriers import braking_capability, largest_input
 
@@ -92,22 +108,21 @@ class DoubleIntegrator(Dynamics):
             )
 
     def filter_rows(self, cfg, positions, velocities, weights, I, J, bodies, capsules, n):
-        if cfg.barrier != "backup":
+        if cfg.barrier not in BACKED:
             return super().filter_rows(
                 cfg, positions, velocities, weights, I, J, bodies, capsules, n
             )
-        from rsvo_env.dynamics.backup_barrier import backup_rows
-
-        return backup_rows(
+        return _backed(cfg.barrier)[0](
             positions, velocities, weights, I, J, cfg.gamma, cfg.dt, bodies, capsules, n
         )
 
     def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:
         from rsvo_env.dynamics import barriers
 
-        if cfg.barrier == "backup":
+        if cfg.barrier in BACKED:
             raise ValueError(
-                "the backup barrier's rows come with each agent's trust box: use filter_rows"
+                f"the {cfg.barrier} barrier's rows come with each agent's trust box: use "
+                "filter_rows"
             )
 
         if bodies.uniform:
@@ -130,7 +145,7 @@ class DoubleIntegrator(Dynamics):
         if walls.any():
             raise ValueError(
                 f"walls are not available for the double_integrator with the {cfg.barrier} "
-                "barrier (circles are; the backup barrier takes walls): obstacle "
+                "barrier (circles are; the segment and backup barriers take walls): obstacle "
                 f"{int(np.nonzero(walls)[-1][0])} is a segment"
             )
         if cfg.dt is not None and cfg.barrier == "braking":
@@ -149,11 +164,9 @@ class DoubleIntegrator(Dynamics):
     def culling_radii(self, cfg, omega_floor, velocities, bodies):
         from rsvo_env.dynamics.double_integrator_radii import WorstPair, double_integrator_radii
 
-        if cfg.barrier == "backup":
-            from rsvo_env.dynamics.backup_barrier import backup_radii
-
+        if cfg.barrier in BACKED:
             E, n = velocities.shape[:2]
-            return backup_radii(
+            return _backed(cfg.barrier)[1](
                 omega_floor, velocities, cfg.gamma, cfg.dt, bodies.radii.reshape(E, n),
                 bodies.lo.reshape(E, n, 2), bodies.hi.reshape(E, n, 2),
                 bodies.speed.reshape(E, n),

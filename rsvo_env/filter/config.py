@@ -49,7 +49,7 @@ class FilterConfig:
     dynamics: str | models.Dynamics = "single_integrator"
     weighting: Weighting = "asymmetric"
     solver: str = "exact"
-    barrier: str = "backup"
+    barrier: str = "segment"
     split: str = "capability"
     gamma2: float | None = None
     neighbor_radius: float | None = None

@@ -115,7 +115,10 @@ class RampMerge(Scenario):
         "a_max": 5.0,
         "safety_radius": 5.0,
         "gamma": 1.0,
-        "barrier": "braking",
+        # the start (15 m/s, 41 m apart) lies in the stopping-segment barrier's safe set
+        # (h = 20.4 m; the disk's h is -9.7 m): every QP feasible, no sample below 5 m. The
+        # paper's own braking barrier stays by name; the reproduction runs it explicitly
+        "barrier": "segment",
         "split": "capability",
         "finish_y": 130.0,
         "max_steps": 1500,
