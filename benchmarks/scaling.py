@@ -7,8 +7,9 @@
    ``do_step`` alone timed. Blocks of steps alternate between the two; each figure is the fastest
    block (the least disturbed by other processes on a shared machine). Our smallest distance
    over every step is checked against R.
-2. Double-integrator crowds at N in {100, 1,000}: the filtered step (acceleration box, braking
-   barrier, no user radius) plus the exact zero-order-hold step, per agent-step and against the
+2. Double-integrator crowds at N in {100, 1,000}: the filtered step (acceleration box; the
+   stopping-segment, backup and braking barriers,
+   no user radius) plus the exact zero-order-hold step, per agent-step and against the
    single integrator's cost at the same N; the share of infeasible agent-steps; every 20th step
    the actions and flags are compared with the all-pairs filter's.
 3. A 10,000-agent crowd for 1,000 filtered steps through ``BatchedEnv`` (scripted nominal), and
@@ -33,6 +34,7 @@ import numpy as np
 
 from rsvo_env.control.nominal import move_to_goal
 from rsvo_env.dynamics import double_integrator_step
+from rsvo_env.dynamics.unicycle import unicycle_step
 from rsvo_env.filter import dense
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
@@ -118,7 +120,7 @@ class DoubleIntegrator:
 
     GAMMA, A_MAX, K_V = 2.0, 1.0, 2.0
 
-    def __init__(self, n: int, spread: bool, barrier: str = "backup") -> None:
+    def __init__(self, n: int, spread: bool, barrier: str = "segment") -> None:
         self.sc, self.p, self.goals = crowd_start(n)
         par = self.sc.params
         self.v = np.zeros_like(self.p)
@@ -169,6 +171,49 @@ class DoubleIntegrator:
                                       cfg.hi)[:2]  # fmt: skip
         same_flags = np.array_equal(feasible, res.feasible)
         return bool(same_flags and np.abs(u - res.actions).max() <= 1e-12 * self.A_MAX)
+
+
+class Unicycle:
+    """A unicycle crowd: the filter on plain arrays (look-ahead points, ``docs/unicycle.md``)
+    plus the exact step of the look-ahead hold. The crowd's starts and goals spread by
+    ``(R + 4 l) / R`` so the look-ahead points start apart; nominal: full speed toward the
+    goal, turning at ``K_W`` times the heading error."""
+
+    GAMMA, LOOKAHEAD, W_MAX, K_W = 2.0, 0.2, 3.0, 2.0
+
+    def __init__(self, n: int, spread: bool) -> None:
+        self.sc, p, goals = crowd_start(n)
+        par = self.sc.params
+        self.R, self.v_max = par["safety_radius"], par["u_max"]
+        grow = (self.R + 4.0 * self.LOOKAHEAD) / self.R
+        centre = p.mean(axis=0)
+        self.p, self.goals = centre + grow * (p - centre), centre + grow * (goals - centre)
+        d = self.goals - self.p
+        self.th = np.arctan2(d[:, 1], d[:, 0])
+        self.theta = scores(n, spread)
+        self.flt = SafetyFilter(
+            FilterConfig(gamma=self.GAMMA, safety_radius=self.R, u_max=self.v_max, dt=DT,
+                         dynamics="unicycle", lookahead=self.LOOKAHEAD, w_max=self.W_MAX)
+        )  # fmt: skip
+        self.agent_steps = self.infeasible = self.mismatches = self.checks = 0
+        self.min_distance = float(nearest_distance(self.p).min())
+
+    def nominal(self) -> np.ndarray:
+        d = self.goals - self.p
+        err = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - self.th)))
+        v = np.minimum(np.linalg.norm(d, axis=1), self.v_max) * np.maximum(np.cos(err), 0.0)
+        return np.c_[v, np.clip(self.K_W * err, -self.W_MAX, self.W_MAX)]
+
+    def step(self) -> None:
+        res = self.flt.filter(self.p, self.nominal(), self.theta, headings=self.th)
+        self.last = res
+        self.p, self.th = unicycle_step(self.p, self.th, res.actions, self.LOOKAHEAD, DT)
+
+    def check(self, all_pairs: bool) -> None:
+        """Count infeasible agent-steps (the all-pairs comparison is the double integrator's)."""
+        self.agent_steps += self.last.feasible.size
+        self.infeasible += int((~self.last.feasible).sum())
+        self.min_distance = min(self.min_distance, float(nearest_distance(self.p).min()))
 
 
 def timed(sim, steps: int, after=None) -> float:
@@ -261,7 +306,7 @@ def double_integrator_rows(blocks: int) -> list[dict]:
     """Section 2: each barrier's double-integrator crowd against the single integrator."""
     di = []
     for n in (100, 1000):
-        for barrier in ("backup", "braking"):
+        for barrier in ("segment", "backup", "braking"):
             steps = 40 if n <= 100 else 10
             sim = DoubleIntegrator(n, spread=True, barrier=barrier)
             si = Ours(n, spread=True)
@@ -286,6 +331,13 @@ def double_integrator_rows(blocks: int) -> list[dict]:
                 }
             )
             print(di[-1], flush=True)
+        uni, si = Unicycle(n, spread=True), Ours(n, spread=True)
+        t = alternate({"di": uni, "si": si}, n, 40 if n <= 100 else 10, blocks,
+                      {"di": lambda uni=uni: uni.check(False)})  # fmt: skip
+        di.append({"n": n, "barrier": "unicycle (look-ahead points)", "di": t["di"],
+                   "si": t["si"], "agent_steps": uni.agent_steps, "infeasible": uni.infeasible,
+                   "checks": 0, "mismatches": 0, "min_distance": uni.min_distance})  # fmt: skip
+        print(di[-1], flush=True)
     return di
 
 

@@ -25,13 +25,14 @@ def plot(rows: list[dict], di: list[dict], path: Path) -> None:
         pts = [(r["n"], r[key]) for r in rows if r.get(key)]
         if pts:
             ax.plot(*zip(*pts, strict=True), style, label=label)
-    for barrier, style in (("backup", "D:"), ("braking", "x:")):
+    for barrier, style in (("segment", "P-"), ("backup", "D:"), ("braking", "x:"),
+                           ("unicycle (look-ahead points)", "v-")):  # fmt: skip
         pts = [(d["n"], d["di"]) for d in di if d.get("barrier", "braking") == barrier]
         if pts:
-            ax.plot(*zip(*pts, strict=True), style,
-                    label=f"double integrator, {barrier} barrier, theta 1..10")  # fmt: skip
+            label = (f"double integrator, {barrier} barrier" if barrier[0] != "u" else barrier)
+            ax.plot(*zip(*pts, strict=True), style, label=f"{label}, theta 1..10")
     # the double integrator's own reference: its ratios are to this run, not to section 1's
-    ref = {d["n"]: d["si"] for d in di if d.get("barrier") == "backup"}
+    ref = {d["n"]: d["si"] for d in di if d.get("barrier") == "segment"}
     if ref:
         ax.plot(list(ref), list(ref.values()), ".:", color="grey",
                 label="single integrator, in the double integrator's run")  # fmt: skip
@@ -55,14 +56,16 @@ def di_section(di: list, DT: float, DoubleIntegrator) -> list[str]:
         "",
         f"Acceleration box |a_k| <= {DoubleIntegrator.A_MAX}, gamma = {DoubleIntegrator.GAMMA},"
         f" dt = {DT}, no user `neighbor_radius` (each agent's radius comes from the speeds and"
-        " the box); the backup barrier (the default, `docs/double_integrator.md`) and the"
-        " braking barrier with the capability split. Nominal: a = 2 (v_des - v) with v_des the"
+        " the box); the stopping-segment barrier (the default, `docs/double_integrator.md`),"
+        " the backup barrier (the stopping disk) and the braking barrier with the capability"
+        " split. Nominal: a = 2 (v_des - v) with v_des the"
         " move-to-goal command. Against the single integrator on the same crowd and theta in"
         " the same run, blocks alternating. Every 20th step the actions and flags are"
         " recomputed with all pairs. Rerun this section alone:"
         " `python benchmarks/scaling.py --di-only`.",
         "",
-        "| N | barrier | double integrator [µs] | single integrator [µs] | ratio |"
+        "| N | barrier (or model) | double integrator (or unicycle) [µs] |"
+        " single integrator [µs] | ratio |"
         " infeasible agent-steps | all-pairs checks (mismatches) | min distance [m] |",
         "|---|---|---|---|---|---|---|---|",
     ]

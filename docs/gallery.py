@@ -3,6 +3,7 @@ how to make it) and the gallery page that shows them all.
 
     python docs/gallery.py            # the pages and every picture (about two minutes)
     python docs/gallery.py --pages    # the pages alone (what tests/test_docs.py checks)
+    python docs/gallery.py --models   # the pictures of scenes with another model (MODEL_SCENES)
 
 The pages come from the code (each scenario's docstring and defaults, the registry's ids and
 step limits), so they cannot drift from it: the tests regenerate them and compare. The
@@ -19,6 +20,8 @@ from pathlib import Path
 DOCS = Path(__file__).resolve().parent
 IMAGES = DOCS / "images"
 PAGES = DOCS / "scenarios"
+# scenes shown with a model other than their default (docs/liveness.md, "Every model")
+MODEL_SCENES = (("doorway", "double_integrator"), ("obstacle_field", "unicycle"))
 
 
 def registered() -> dict[str, str]:
@@ -123,7 +126,8 @@ def write_pages() -> list[Path]:
     return [*written, DOCS / "gallery.md"]
 
 
-def write_images() -> None:
+def picture(scenario: str, name: str, **kwargs: object) -> None:
+    """One episode of seed 0 as ``images/NAME.gif`` and ``images/NAME.png``."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -133,19 +137,33 @@ def write_images() -> None:
     from rsvo_env.cli.figures import episode
 
     IMAGES.mkdir(exist_ok=True)
+    out = run(scenario, gif=IMAGES / f"{name}.gif", gif_every=10, render_size=300, **kwargs)
+    fig = episode(out, scenario, "asymmetric", filtered=True)
+    fig.savefig(IMAGES / f"{name}.png", dpi=80, bbox_inches="tight")
+    plt.close(fig)
+    print(name, out["steps"], "steps,", out["n_collision_steps"], "collision steps")
+
+
+def write_images() -> None:
     for scenario in registered().values():
-        out = run(scenario, gif=IMAGES / f"{scenario}.gif", gif_every=10, render_size=300)
-        fig = episode(out, scenario, "asymmetric", filtered=True)
-        fig.savefig(IMAGES / f"{scenario}.png", dpi=80, bbox_inches="tight")
-        plt.close(fig)
-        print(scenario, out["steps"], "steps,", out["n_collision_steps"], "collision steps")
+        picture(scenario, scenario)
+    write_model_images()
+
+
+def write_model_images() -> None:
+    for scenario, model in MODEL_SCENES:
+        picture(scenario, f"{scenario}_{model}", dynamics=model)
 
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pages", action="store_true", help="the pages alone, no pictures")
+    ap.add_argument("--models", action="store_true", help="the MODEL_SCENES pictures alone")
     args = ap.parse_args()
-    for path in write_pages():
-        print(path.relative_to(DOCS.parent))
-    if not args.pages:
+    if args.models:
+        write_model_images()
+    else:
+        for path in write_pages():
+            print(path.relative_to(DOCS.parent))
+    if not (args.pages or args.models):
         write_images()

@@ -3,7 +3,7 @@ from the definition (the exact distance of two segments, crossings included, not
 filter's separating direction), and clusters built with their tightest h at 0."""
 
 import numpy as np
-from backup_states import reach
+from backup_states import pair_h, reach
 
 
 def point_segment(x, s0, s1):
@@ -112,3 +112,12 @@ def obstacle_cluster(rng, family, E, k, scale):
         centre = np.zeros((E, 1, 2))
     heading /= np.linalg.norm(heading, axis=-1, keepdims=True)
     return p * scale, heading * speed[..., None], radii, a, caps * scale, centre * scale
+
+
+def crowd_pair_h(p, v, radii, a, dt, I, J):
+    """For the crowds' checks (is every h >= 0?): the stopping disk's h, a lower bound of the
+    segment's, replaced by the segment's where it is below 0; the bodies' distance as is."""
+    disk, body = pair_h(p, v, radii, a, dt, I, J)
+    near = np.nonzero(disk < 0)[0]
+    disk[near] = seg_pair_h(p, v, radii, a, dt, I[near], J[near])[0]
+    return disk, body

@@ -9,9 +9,11 @@ import pytest
 from backup_states import cluster, drive, into_safe_set, obstacle_h, pair_h, safe_crowd
 from hypothesis import given
 from hypothesis import strategies as st
+from segment_states import crowd_pair_h, seg_obstacle_h
 
 from rsvo_env.dynamics import backup_barrier as bb
 from rsvo_env.dynamics import double_integrator_step
+from rsvo_env.dynamics import segment_barrier as sb
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
 from rsvo_env.geometry.obstacles import Obstacles
@@ -22,11 +24,17 @@ scales = st.sampled_from([1e-3, 1.0, 1e3])
 unit = st.floats(0.0, 1.0)
 
 
-def config(dt, gamma_dt, scale=1.0, **kw):
+def config(dt, gamma_dt, scale=1.0, barrier="backup", **kw):
     return FilterConfig(
         gamma=gamma_dt / dt, safety_radius=scale, u_max=3.0 * scale, dt=dt,
-        dynamics="double_integrator", barrier="backup", **kw,
+        dynamics="double_integrator", barrier=barrier, **kw,
     )  # fmt: skip
+
+
+# the crowds run under both barriers whose backup meets every row, each checked by its own h
+# (the segment barrier's own tests: tests/test_segment_barrier.py)
+BARRIERS = ("backup", "segment")
+HS = {"backup": (pair_h, obstacle_h), "segment": (crowd_pair_h, seg_obstacle_h)}
 
 
 # --- the lemmas ---------------------------------------------------------------------------
@@ -128,6 +136,7 @@ def test_every_qp_is_feasible_in_states_built_at_h_zero(family, k, E):
 # --- crowds -----------------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("barrier", BARRIERS)
 @pytest.mark.parametrize(
     "n, steps, dt, gamma_dt, scale, speed",
     [
@@ -137,7 +146,7 @@ def test_every_qp_is_feasible_in_states_built_at_h_zero(family, k, E):
         (1000, 150, 0.05, 1.0, 1.0, 4.0),
     ],
 )
-def test_crowds_never_touch_and_stay_feasible(n, steps, dt, gamma_dt, scale, speed):
+def test_crowds_never_touch_and_stay_feasible(n, steps, dt, gamma_dt, scale, speed, barrier):
     """Random crowds (radii 0.2 - 1.2, a_max 0.5 - 3 per agent, theta 0 - 10) from rest or from
     random velocities inside the safe set, driven across each other: no pair ever below
     (r_i + r_j)(1 - 1e-9), no infeasible QP while every h >= 0. (benchmarks/double_integrator.py
@@ -146,15 +155,16 @@ def test_crowds_never_touch_and_stay_feasible(n, steps, dt, gamma_dt, scale, spe
     p, v, radii, a, goals, theta = safe_crowd(rng, n, scale, speed)
     I, J = np.triu_indices(n, 1)
     v = into_safe_set(p, v, radii, a, dt, I, J)
-    flt = SafetyFilter(config(dt, gamma_dt, scale))
+    flt = SafetyFilter(config(dt, gamma_dt, scale, barrier=barrier))
     worst, _, infeasible, *_ = drive(
-        flt, p, v, goals, radii, a, theta, dt, steps, 2.0 * scale, I, J
+        flt, p, v, goals, radii, a, theta, dt, steps, 2.0 * scale, I, J, hs=HS[barrier]
     )
     assert infeasible == 0
     assert worst >= 1.0 - TOL
 
 
-def test_culled_filter_equals_all_pairs():
+@pytest.mark.parametrize("barrier", BARRIERS)
+def test_culled_filter_equals_all_pairs(barrier):
     """A 300-agent crowd in motion, theta with zeros (pairs searched at every distance): each
     step's actions and flags are those of the rows over all pairs, to 1e-12 of the box."""
     rng = np.random.default_rng(7)
@@ -163,7 +173,8 @@ def test_culled_filter_equals_all_pairs():
     theta[::37] = 0.0
     I, J = np.triu_indices(n, 1)
     v = into_safe_set(p, v, radii, a, dt, I, J)
-    flt = SafetyFilter(config(dt, 0.5))
+    flt = SafetyFilter(config(dt, 0.5, barrier=barrier))
+    rows_of = {"backup": bb.backup_rows, "segment": sb.segment_rows}[barrier]
     Ia, Ja = pairs.all_pairs(n)
     checked = 0
     for step in range(60):
@@ -172,7 +183,7 @@ def test_culled_filter_equals_all_pairs():
         if step % 6 == 0:
             w = flt.pair_weights(theta, None, Ia, Ja)
             boxes = bb.AgentBoxes(radii, -np.c_[a, a], np.c_[a, a])
-            rows, _ = bb.backup_rows(p, v, w, Ia, Ja, flt.config.gamma, dt, boxes, cull=False)
+            rows, _ = rows_of(p, v, w, Ia, Ja, flt.config.gamma, dt, boxes, cull=False)
             ua, fa = solvers.solve("exact", u, rows.flat_A, rows.flat_b, rows.offsets,
                                    -np.c_[a, a], np.c_[a, a])[:2]  # fmt: skip
             assert np.array_equal(fa, res.feasible)
@@ -196,8 +207,9 @@ def field(rng, scale):
     return Obstacles.of(circles * scale, walls * scale, rng.uniform(0.1, 0.4, 6) * scale)
 
 
+@pytest.mark.parametrize("barrier", BARRIERS)
 @pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
-def test_crowds_driven_through_walls_and_circles_never_touch(scale):
+def test_crowds_driven_through_walls_and_circles_never_touch(scale, barrier):
     """40 double integrators cross a field of circles and walls toward goals beyond it: no body
     penetrates an obstacle or another body, no infeasible QP while every h >= 0."""
     rng = np.random.default_rng(int(np.log10(scale)) + 5)
@@ -211,9 +223,9 @@ def test_crowds_driven_through_walls_and_circles_never_touch(scale):
     theta = rng.uniform(0, 10, n)
     I, J = np.triu_indices(n, 1)
     v = into_safe_set(p, np.zeros((n, 2)), radii, a, dt, I, J, obstacles.capsules)
-    flt = SafetyFilter(config(dt, 0.5, scale))
+    flt = SafetyFilter(config(dt, 0.5, scale, barrier=barrier))
     worst, worst_o, infeasible, p, _ = drive(
-        flt, p, v, goals, radii, a, theta, dt, 1200, 3.0 * scale, I, J, obstacles
+        flt, p, v, goals, radii, a, theta, dt, 1200, 3.0 * scale, I, J, obstacles, hs=HS[barrier]
     )
     assert infeasible == 0
     assert worst >= 1.0 - TOL and worst_o >= 1.0 - TOL

@@ -185,20 +185,17 @@ def backup_rows(
     hs, others = [h, h], [J, I]
     obstacle_h = None
     if capsules is not None:
-        O = capsules.shape[1]
-        caps = np.broadcast_to(capsules, (M // n, O, 5)) if capsules.shape[0] == 1 else capsules
-        near = nearest_points(positions.reshape(-1, n, 2), caps).reshape(M * O, 2)
-        agent = np.repeat(np.arange(M), O)
+        agent, cap, near, neighbour = obstacle_slots(positions, capsules, n)
         d_o = positions[agent] - near
         dist_o = np.sqrt((d_o * d_o).sum(axis=-1))
         with np.errstate(divide="ignore", invalid="ignore"):
             e_o = d_o / dist_o[:, None]
-        h_o = dist_o - radii[agent] - caps[agent // n, np.arange(M * O) % O, 4] - t.L[agent]
+        h_o = dist_o - radii[agent] - cap[:, 4] - t.L[agent]
         owner.append(agent)
         normals.append(e_o)
         shares.append(rate * settled(h_o, dist_o + t.L[agent]))
         hs.append(h_o)
-        others.append(-1 - np.arange(M * O) % O)
+        others.append(neighbour)
         obstacle_h = np.full(M, np.inf)
         np.minimum.at(obstacle_h, agent, np.where(np.isfinite(h_o), h_o, -np.inf))
     owner_all = np.concatenate(owner)
@@ -221,13 +218,34 @@ def backup_rows(
     # rows that cannot bind over the agent's trust box are dropped: the trust rows keep the
     # solution inside it
     keep = (not cull) | bad | (b < _support(A, box_lo[owner_all], box_hi[owner_all]))
-    parts = [(owner_all[keep], A[keep], b[keep], others_all[keep], h_all[keep])]
-    if dt is not None:
-        parts.append(_trust_rows(t.beta, rho, lo, hi, owner_all, h_all, M, cull))
+    trust = None if dt is None else _trust_rows(t.beta, rho, lo, hi, owner_all, h_all, M, cull)
+    rows = kept_rows(M, (owner_all, A, b, others_all, h_all), keep, trust, h, len(I))
+    return rows, obstacle_h
+
+
+def obstacle_slots(positions: NDArray, capsules: NDArray, n: int):
+    """Every (agent, obstacle) slot of a batch of ``n`` agents an env, agent-major: the agent
+    (M O,), its capsule (M O, 5), the capsule's point nearest the agent (M O, 2) and the
+    obstacle as a row's neighbour, ``-1 - o``."""
+    M, O = len(positions), capsules.shape[1]
+    caps = np.broadcast_to(capsules, (M // n, O, 5)) if capsules.shape[0] == 1 else capsules
+    near = nearest_points(positions.reshape(-1, n, 2), caps).reshape(M * O, 2)
+    agent = np.repeat(np.arange(M), O)
+    slot = np.arange(M * O) % O
+    return agent, caps[agent // n, slot], near, -1 - slot
+
+
+def kept_rows(M: int, rows: tuple, keep: NDArray, trust: tuple | None, pair_h: NDArray,
+              n_pairs: int) -> Rows:  # fmt: skip
+    """The barrier's rows (owner, A, b, neighbour, h) where ``keep``, then each agent's trust
+    rows (``_trust_rows``, None in continuous time), stored by agent."""
+    parts = [tuple(x[keep] for x in rows)]
+    if trust is not None:
+        parts.append(trust)
     owner_k, A_k, b_k, other_k, h_k = (np.concatenate(c) for c in zip(*parts, strict=True))
-    rows = _store(M, owner_k, A_k, b_k, other_k, h_k)
-    n_culled = len(b) + (4 * M if dt is not None else 0) - len(b_k)
-    return Rows(**rows, pair_h=h, n_pairs=len(I), n_culled=n_culled), obstacle_h
+    stored = _store(M, owner_k, A_k, b_k, other_k, h_k)
+    n_culled = len(keep) + (4 * M if trust is not None else 0) - len(b_k)
+    return Rows(**stored, pair_h=pair_h, n_pairs=n_pairs, n_culled=n_culled)
 
 
 def _support(A: NDArray, lo: NDArray, hi: NDArray) -> NDArray[np.float64]:

@@ -26,50 +26,27 @@ agent's trust box ``|a - beta_i|_inf <= rho_i`` is the largest that keeps those 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env.dynamics.backup_barrier import (
+    SETTLE,
     TRUST_SHRINK,
     AgentBoxes,
     AgentTerms,
-    _store,
-    _support,
     _trust_rows,
     agent_terms,
+    kept_rows,
+    obstacle_slots,
     settled,
 )
 from rsvo_env.dynamics.barriers import braking_capability
-from rsvo_env.geometry.obstacles import nearest_points
-from rsvo_env.geometry.segments import separation
+from rsvo_env.geometry.segments import separate, separation
 from rsvo_env.qp.rows import Rows
 
 _SQRT2 = np.sqrt(2.0)
 
 __all__ = ["AgentBoxes", "segment_radii", "segment_rows"]
-
-
-def kappa(t: AgentTerms, dt: float) -> NDArray[np.float64]:
-    """Eq. ``seg-remainder``: row 2's loss at the backup per unit of trust radius and of
-    ``|n.v_hat|``, ``sqrt 2 dt |v + dt beta| / (2 c)``."""
-    w = np.where(t.speed >= t.c * dt, t.speed - t.c * dt, 0.0)
-    return _SQRT2 * dt * w / (2.0 * t.c)
-
-
-def _slacks(t: AgentTerms, owner: NDArray, e: NDArray, sigma: NDArray, dt: float):
-    """Per directed row: ``n.v_hat`` and the slacks at the backup before the trust box, row 1's
-    ``sigma + (n.p+(beta) - m)`` and row 2's ``sigma + |n.v_hat| spare`` where the far end
-    leads; every term a product of terms >= 0, none a difference (the backup moves the near end
-    by ``travel`` along the segment and the far end back by ``spare``)."""
-    nv = (e * t.unit[owner]).sum(axis=-1)
-    travel, spare = t.travel[owner], t.spare[owner]
-    s, c = t.speed[owner], t.c[owner]
-    # L - travel in closed form: (s - c dt)^2 / (2 c) + s dt / 2 while braking (the backup's
-    # next reach plus c dt^2 / 2), s^2 / (2 c) = spare when it stops within the step
-    brakes = s >= c * dt
-    behind = np.where(brakes, (s - c * dt) ** 2 / (2.0 * c) + 0.5 * s * dt, spare)
-    tau1 = sigma + np.where(nv >= 0, nv * travel, -nv * behind)
-    tau2 = sigma + np.where(nv >= 0, nv * travel, -nv * spare)
-    return nv, tau1, tau2
 
 
 def segment_rows(
@@ -94,22 +71,16 @@ def segment_rows(
     M = len(positions)
     t = agent_terms(velocities, lo, hi, dt)
     reach = t.unit * t.L[:, None]  # each segment, from its agent
-    d = positions[I] - positions[J]
-    zero = np.zeros_like(d)
-    e, bound = separation(d, d + reach[I], zero, reach[J], d)
-    h = bound - radii[I] - radii[J]
     rate = gamma if dt is None else gamma * dt
-    hp = rate * settled(h, np.sqrt((d * d).sum(axis=-1)) + t.L[I] + t.L[J])
-    w = np.where(hp >= 0.0, weights[:, 0], weights[:, 1])
-    owner, normals, shares = [I, J], [e, -e], [w * hp, (1.0 - w) * hp]
+    P = len(I)
+    e, sigma_p, h = np.empty((2 * P, 2)), np.empty(2 * P), np.empty(P)
+    _pair_terms(np.ascontiguousarray(positions), I, J, reach, t.L, radii,
+                np.ascontiguousarray(weights), rate, SETTLE, e, sigma_p, h)  # fmt: skip
+    owner, normals, shares = [I, J], [e], [sigma_p]
     hs, others = [h, h], [J, I]
     obstacle_h = None
     if capsules is not None:
-        O = capsules.shape[1]
-        caps = np.broadcast_to(capsules, (M // n, O, 5)) if capsules.shape[0] == 1 else capsules
-        near = nearest_points(positions.reshape(-1, n, 2), caps).reshape(M * O, 2)
-        agent = np.repeat(np.arange(M), O)
-        cap = caps[agent // n, np.arange(M * O) % O]
+        agent, cap, near, neighbour = obstacle_slots(positions, capsules, n)
         # coordinates about the obstacle's point nearest the agent, to keep them small
         a0 = positions[agent] - near
         e_o, bound_o = separation(a0, a0 + reach[agent], cap[:, 0:2] - near, cap[:, 2:4] - near, a0)
@@ -118,7 +89,7 @@ def segment_rows(
         normals.append(e_o)
         shares.append(rate * settled(h_o, np.sqrt((a0 * a0).sum(axis=-1)) + t.L[agent]))
         hs.append(h_o)
-        others.append(-1 - np.arange(M * O) % O)
+        others.append(neighbour)
         obstacle_h = np.full(M, np.inf)
         np.minimum.at(obstacle_h, agent, np.where(np.isfinite(h_o), h_o, -np.inf))
     own = np.concatenate(owner)
@@ -132,44 +103,113 @@ def segment_rows(
         box_lo = np.minimum(np.maximum(lo, t.beta - rho[:, None]), t.beta)
         box_hi = np.maximum(np.minimum(hi, t.beta + rho[:, None]), t.beta)
         own, h_all, others_all = (np.concatenate([x, x]) for x in (own, h_all, others_all))
-    # bodies at one point (or a body on a wall's core) have no direction to part along: a row
-    # no action meets flags the QP infeasible instead
-    bad = ~(np.isfinite(A).all(axis=-1) & np.isfinite(b))
-    if bad.any():
-        A = np.where(bad[:, None], 0.0, A)
-        b = np.where(bad, -1.0, b)
-    keep = (not cull) | bad | (b < _support(A, box_lo[own], box_hi[own]))
-    parts = [(own[keep], A[keep], b[keep], others_all[keep], h_all[keep])]
-    if dt is not None:
-        parts.append(_trust_rows(t.beta, rho, lo, hi, own, h_all, M, cull))
-    owner_k, A_k, b_k, other_k, h_k = (np.concatenate(c) for c in zip(*parts, strict=True))
-    rows = _store(M, owner_k, A_k, b_k, other_k, h_k)
-    n_culled = len(b) + (4 * M if dt is not None else 0) - len(b_k)
-    return Rows(**rows, pair_h=h, n_pairs=len(I), n_culled=n_culled), obstacle_h
+    keep = np.empty(len(b), dtype=np.bool_)
+    _keep(A, b, own, np.ascontiguousarray(box_lo), np.ascontiguousarray(box_hi), cull, keep)
+    trust = None if dt is None else _trust_rows(t.beta, rho, lo, hi, own, h_all, M, cull)
+    return kept_rows(M, (own, A, b, others_all, h_all), keep, trust, h, len(I)), obstacle_h
+
+
+@njit(cache=True, error_model="numpy")
+def _pair_terms(positions, I, J, reach, L, radii, weights, rate, settle, e, sigma, h):
+    """Per pair k: the separating direction of the two stopping segments (eq. ``separation``)
+    into ``e[k]`` (agent I's) and ``e[P + k] = -e[k]`` (agent J's), h (eq. ``seg-h``) into
+    ``h[k]``, the R-SVO shares of ``rate h`` (eq. ``share``: a rounding below 0 read as 0,
+    sign-aware below it) into ``sigma[k]`` and ``sigma[P + k]``. Coordinates about agent J,
+    to keep them small."""
+    P = len(I)
+    for k in range(P):
+        i, j = I[k], J[k]
+        dx, dy = positions[i, 0] - positions[j, 0], positions[i, 1] - positions[j, 1]
+        nx, ny, bound = separate(dx, dy, dx + reach[i, 0], dy + reach[i, 1], 0.0, 0.0,
+                                 reach[j, 0], reach[j, 1], dx, dy)  # fmt: skip
+        hk = bound - radii[i] - radii[j]
+        size = np.sqrt(dx * dx + dy * dy) + L[i] + L[j]
+        hp = rate * (hk if hk < -settle * size else max(hk, 0.0))
+        w = weights[k, 0] if hp >= 0.0 else weights[k, 1]
+        h[k] = hk
+        e[k, 0], e[k, 1], e[P + k, 0], e[P + k, 1] = nx, ny, -nx, -ny
+        sigma[k], sigma[P + k] = w * hp, (1.0 - w) * hp
+
+
+@njit(cache=True, error_model="numpy")
+def _keep(A, b, own, box_lo, box_hi, cull, keep):
+    """Rows a body at another's point (or on a wall's core) makes undefined become ``0 . a <=
+    -1``, which no action meets: the QP says infeasible. A row is kept if it can bind over its
+    agent's trust box (every row without ``cull``)."""
+    for k in range(len(b)):
+        i = own[k]
+        if not (np.isfinite(A[k, 0]) and np.isfinite(A[k, 1]) and np.isfinite(b[k])):
+            A[k, 0], A[k, 1], b[k] = 0.0, 0.0, -1.0
+            keep[k] = True
+            continue
+        top = max(A[k, 0] * box_lo[i, 0], A[k, 0] * box_hi[i, 0])
+        top += max(A[k, 1] * box_lo[i, 1], A[k, 1] * box_hi[i, 1])
+        keep[k] = (not cull) or b[k] < top
 
 
 def _sampled(t: AgentTerms, own: NDArray, e: NDArray, sigma: NDArray, M: int, dt: float):
     """Rows 1 and 2 (eq. ``seg-rows``) of every directed row, stacked, and each agent's trust
-    radius: the largest (to ``rho_full``) with ``|n.v_hat| kappa rho <= tau2`` where the far end
-    leads, shrunk by a relative hair so the backup keeps room for rounding."""
-    nv, tau1, tau2 = _slacks(t, own, e, sigma, dt)
-    k = kappa(t, dt)[own]
-    lead = (nv < 0) & (k > 0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        limit = np.where(lead, np.maximum(tau2, 0.0) / (-nv * k), np.inf)
-    rho_row = np.full(M, np.inf)
-    np.minimum.at(rho_row, own, np.where(np.isnan(limit), 0.0, limit))
-    rho = np.minimum(t.rho_full, rho_row * TRUST_SHRINK)
-    w_beta = np.where(t.speed >= t.c * dt, t.speed - t.c * dt, 0.0)
-    K = ((w_beta + _SQRT2 * dt * rho) / (2.0 * t.c) + 0.5 * dt)[own]
-    A1 = -(0.5 * dt * dt) * e
-    A2 = -(0.5 * dt * dt + dt * K)[:, None] * e
-    # row 2 at the backup: n.w_beta = nv |w_beta|, and W - |w_beta| = sqrt 2 dt rho
-    tau2 = np.where(nv >= 0, tau2 + K * nv * w_beta[own], tau2 + nv * k * rho[own])
-    beta = t.beta[own]
-    b1 = (A1 * beta).sum(axis=-1) + tau1
-    b2 = (A2 * beta).sum(axis=-1) + tau2
-    return np.concatenate([A1, A2]), np.concatenate([b1, b2]), rho
+    radius (:func:`_sampled_rows`)."""
+    K = len(own)
+    A, b, rho = np.empty((2 * K, 2)), np.empty(2 * K), np.empty(M)
+    terms = (t.unit, t.travel, t.spare, t.speed, t.c, np.ascontiguousarray(t.beta), t.rho_full)
+    _sampled_rows(own, np.ascontiguousarray(e), sigma, *terms, dt, TRUST_SHRINK, A, b, rho)
+    return A, b, rho
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _slacks(k, i, own, e, sigma, unit, travel, spare, speed, c, dt):
+    """Directed row k of agent i: ``n.v_hat`` and the slacks of rows 1 and 2 at the backup
+    before the trust box. Sums of products of terms >= 0, none a difference: the backup moves
+    the near end by ``travel`` along the segment and the far end back by ``spare``;
+    ``L - travel`` is ``(s - c dt)^2 / (2 c) + s dt / 2`` while braking, ``spare`` when it
+    stops within the step."""
+    nv = e[k, 0] * unit[i, 0] + e[k, 1] * unit[i, 1]
+    if nv >= 0:
+        return nv, sigma[k] + nv * travel[i], sigma[k] + nv * travel[i]
+    s, ci = speed[i], c[i]
+    behind = (s - ci * dt) ** 2 / (2.0 * ci) + 0.5 * s * dt if s >= ci * dt else spare[i]
+    return nv, sigma[k] - nv * behind, sigma[k] - nv * spare[i]
+
+
+@njit(cache=True, error_model="numpy")
+def _sampled_rows(own, e, sigma, unit, travel, spare, speed, c, beta, rho_full, dt, shrink,
+                  A, b, rho):  # fmt: skip
+    """Row 1 of directed row k into ``A[k], b[k]``, row 2 into ``A[K + k], b[K + k]``; each
+    agent's trust radius into ``rho``: the largest (to ``rho_full``) with
+    ``|n.v_hat| kappa rho <= tau2`` where the far end leads (eq. ``seg-remainder``,
+    ``kappa = sqrt 2 dt |w_beta| / (2 c)``), shrunk by a relative hair so the backup keeps room
+    for rounding. The slacks are computed twice (:func:`_slacks`) rather than stored: the
+    radius needs every row of the agent first, and fresh memory costs more than the sums."""
+    K, M = len(own), len(rho)
+    w_beta, kap = np.empty(M), np.empty(M)
+    for i in range(M):
+        w_beta[i] = speed[i] - c[i] * dt if speed[i] >= c[i] * dt else 0.0
+        kap[i] = np.sqrt(2.0) * dt * w_beta[i] / (2.0 * c[i])
+        rho[i] = np.inf
+    for k in range(K):
+        i = own[k]
+        nv, _, tau2 = _slacks(k, i, own, e, sigma, unit, travel, spare, speed, c, dt)
+        if nv < 0 and kap[i] > 0:
+            limit = max(tau2, 0.0) / (-nv * kap[i])
+            rho[i] = min(rho[i], 0.0 if np.isnan(limit) else limit)
+    for i in range(M):
+        rho[i] = min(rho_full[i], rho[i] * shrink)
+    a1 = 0.5 * dt * dt
+    for k in range(K):
+        i = own[k]
+        nv, tau1, tau2 = _slacks(k, i, own, e, sigma, unit, travel, spare, speed, c, dt)
+        Ki = (w_beta[i] + np.sqrt(2.0) * dt * rho[i]) / (2.0 * c[i]) + 0.5 * dt
+        a2 = a1 + dt * Ki
+        A[k, 0], A[k, 1] = -a1 * e[k, 0], -a1 * e[k, 1]
+        A[K + k, 0], A[K + k, 1] = -a2 * e[k, 0], -a2 * e[k, 1]
+        # row 2 at the backup: n.w_beta = nv |w_beta|, and W - |w_beta| = sqrt 2 dt rho
+        if nv >= 0:
+            tau2 += Ki * nv * w_beta[i]
+        else:
+            tau2 += nv * kap[i] * rho[i]
+        b[k] = A[k, 0] * beta[i, 0] + A[k, 1] * beta[i, 1] + tau1
+        b[K + k] = A[K + k, 0] * beta[i, 0] + A[K + k, 1] * beta[i, 1] + tau2
 
 
 def _continuous(t: AgentTerms, own: NDArray, e: NDArray, sigma: NDArray):
@@ -198,7 +238,8 @@ def segment_radii(
     with a positive weight can bind nor narrow its trust box (``docs/double_integrator.md``).
 
     ``dist(S_i, S_j) >= |d| - L_i - L_j``; a row cannot bind over the box nor set the trust
-    radius once its share covers ``S_i = 2 kappa_i rho_full + 2 |U_i| |A_2|`` with
+    radius once its share covers ``S_i = kappa_i rho_full + 2 |U_i| |A_2|`` (row 2's slack is
+    at least ``sigma - kappa_i rho_full``) with
     ``rho_full <= 2 m_i``, ``|A_2| <= dt^2 + dt (s_i + 2 sqrt 2 dt m_i) / (2 c_i)``; in continuous
     time ``S_i = s_i (1 + |U_i| / c_i)``, as the backup barrier's."""
     c = braking_capability(lo, hi)
@@ -209,7 +250,7 @@ def segment_radii(
     else:
         m = np.maximum(np.abs(lo), np.abs(hi)).max(axis=-1)
         A2 = dt * dt + dt * (speed + 2.0 * _SQRT2 * dt * m) / (2.0 * c)
-        S = 2.0 * _SQRT2 * dt * speed * 2.0 * m / (2.0 * c) + 2.0 * speed_max * A2
+        S = _SQRT2 * dt * speed * 2.0 * m / (2.0 * c) + 2.0 * speed_max * A2
         rate = gamma * dt
     base = radii + radii.max(axis=-1, keepdims=True) + L + L.max(axis=-1, keepdims=True)
     ok = np.isfinite(omega_floor)

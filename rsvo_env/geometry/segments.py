@@ -7,16 +7,53 @@ endpoint of one of them, so the four endpoint-to-segment distances find it."""
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
+from rsvo_env.geometry.obstacles import nearest_point
 
-def _to_segment(x: NDArray, s0: NDArray, s1: NDArray) -> NDArray[np.float64]:
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _to_segment(x0, x1, s0x, s0y, s1x, s1y):
     """``x`` minus its nearest point of the segment ``[s0, s1]`` (a point when s0 = s1)."""
-    e = s1 - s0
-    L2 = (e * e).sum(axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(L2 > 0, ((x - s0) * e).sum(axis=-1) / L2, 0.0)
-    return x - s0 - np.clip(t, 0.0, 1.0)[..., None] * e
+    nx, ny = nearest_point(x0, x1, s0x, s0y, s1x, s1y)
+    return x0 - nx, x1 - ny
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def separate(a0x, a0y, a1x, a1y, b0x, b0y, b1x, b1y, fx, fy):
+    """One pair of segments: ``(n_x, n_y, bound)`` of :func:`separation`."""
+    # the four endpoint-to-segment offsets, each from B toward A; the first smallest wins
+    bx, by = _to_segment(a0x, a0y, b0x, b0y, b1x, b1y)
+    best = bx * bx + by * by
+    cx, cy = _to_segment(a1x, a1y, b0x, b0y, b1x, b1y)
+    if cx * cx + cy * cy < best:
+        bx, by, best = cx, cy, cx * cx + cy * cy
+    cx, cy = _to_segment(b0x, b0y, a0x, a0y, a1x, a1y)
+    if cx * cx + cy * cy < best:
+        bx, by, best = -cx, -cy, cx * cx + cy * cy
+    cx, cy = _to_segment(b1x, b1y, a0x, a0y, a1x, a1y)
+    if cx * cx + cy * cy < best:
+        bx, by, best = -cx, -cy, cx * cx + cy * cy
+    length = np.sqrt(best)
+    if length > 0.0:
+        nx, ny = bx / length, by / length
+    else:
+        f = np.sqrt(fx * fx + fy * fy)
+        nx, ny = fx / f, fy / f
+    lo = min(nx * a0x + ny * a0y, nx * a1x + ny * a1y)
+    hi = max(nx * b0x + ny * b0y, nx * b1x + ny * b1y)
+    # segments that meet with no direction to part along are 0 apart
+    return nx, ny, 0.0 if np.isnan(lo - hi) else lo - hi
+
+
+@njit(cache=True, error_model="numpy")
+def _separation(a0, a1, b0, b1, fallback, n, bound):
+    for k in range(len(bound)):
+        n[k, 0], n[k, 1], bound[k] = separate(
+            a0[k, 0], a0[k, 1], a1[k, 0], a1[k, 1], b0[k, 0], b0[k, 1], b1[k, 0], b1[k, 1],
+            fallback[k, 0], fallback[k, 1],
+        )  # fmt: skip
 
 
 def separation(
@@ -27,21 +64,8 @@ def separation(
     ``dist(A, B)`` to rounding when they do not cross and below it when they do. Segments that
     touch take ``fallback`` (a direction, normalised here); where that is 0 too, n is NaN and
     the bound 0."""
-    cand = np.stack(
-        [
-            _to_segment(a0, b0, b1),
-            _to_segment(a1, b0, b1),
-            -_to_segment(b0, a0, a1),
-            -_to_segment(b1, a0, a1),
-        ]
-    )
-    d2 = (cand * cand).sum(axis=-1)
-    best = np.take_along_axis(cand, d2.argmin(axis=0)[None, :, None], axis=0)[0]
-    length = np.sqrt((best * best).sum(axis=-1))
-    f_len = np.sqrt((fallback * fallback).sum(axis=-1))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        n = np.where((length > 0)[:, None], best / length[:, None], fallback / f_len[:, None])
-    dot = lambda x: (n * x).sum(axis=-1)  # noqa: E731
-    bound = np.minimum(dot(a0), dot(a1)) - np.maximum(dot(b0), dot(b1))
-    # segments that meet with no direction to part along are 0 apart
-    return n, np.where(np.isnan(bound), 0.0, bound)
+    K = len(a0)
+    n, bound = np.empty((K, 2)), np.empty(K)
+    args = (np.ascontiguousarray(x, dtype=np.float64) for x in (a0, a1, b0, b1, fallback))
+    _separation(*args, n, bound)
+    return n, bound
