@@ -30,9 +30,10 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env.dynamics.barriers import braking_capability
+from rsvo_env.dynamics.barriers import box_support, braking_capability
 from rsvo_env.geometry.obstacles import nearest_points
 from rsvo_env.qp.rows import Rows
 
@@ -209,18 +210,35 @@ def backup_rows(
         box_hi = np.maximum(np.minimum(hi, t.beta + rho[:, None]), t.beta)
     else:
         b = slack
-    # a body at the other's centre (or on a wall's core) has no direction to keep away along:
-    # a row no action meets flags the QP infeasible instead
-    bad = ~(np.isfinite(A).all(axis=-1) & np.isfinite(b))
-    if bad.any():
-        A = np.where(bad[:, None], 0.0, A)
-        b = np.where(bad, -1.0, b)
-    # rows that cannot bind over the agent's trust box are dropped: the trust rows keep the
-    # solution inside it
-    keep = (not cull) | bad | (b < _support(A, box_lo[owner_all], box_hi[owner_all]))
+    keep = binding(A, b, owner_all, box_lo, box_hi, cull)
     trust = None if dt is None else _trust_rows(t.beta, rho, lo, hi, owner_all, h_all, M, cull)
     rows = kept_rows(M, (owner_all, A, b, others_all, h_all), keep, trust, h, len(I))
     return rows, obstacle_h
+
+
+def binding(A: NDArray, b: NDArray, owner: NDArray, box_lo: NDArray, box_hi: NDArray,
+            cull: bool) -> NDArray[np.bool_]:  # fmt: skip
+    """Which rows to keep: those that can bind over their agent's trust box ``[box_lo,
+    box_hi]`` (every row without ``cull``; the trust rows keep the solution inside the box).
+    A body at another's centre (or on a wall's core) has no direction to keep away along: its
+    undefined row becomes ``0 . a <= -1`` (in place), which no action meets, and is kept, so
+    the QP says infeasible."""
+    keep = np.empty(len(b), dtype=np.bool_)
+    _binding(A, b, owner, np.ascontiguousarray(box_lo), np.ascontiguousarray(box_hi), cull, keep)
+    return keep
+
+
+@njit(cache=True, error_model="numpy")
+def _binding(A, b, owner, box_lo, box_hi, cull, keep):
+    for k in range(len(b)):
+        i = owner[k]
+        if not (np.isfinite(A[k, 0]) and np.isfinite(A[k, 1]) and np.isfinite(b[k])):
+            A[k, 0], A[k, 1], b[k] = 0.0, 0.0, -1.0
+            keep[k] = True
+            continue
+        top = max(A[k, 0] * box_lo[i, 0], A[k, 0] * box_hi[i, 0])
+        top += max(A[k, 1] * box_lo[i, 1], A[k, 1] * box_hi[i, 1])
+        keep[k] = (not cull) or b[k] < top
 
 
 def obstacle_slots(positions: NDArray, capsules: NDArray, n: int):
@@ -248,11 +266,6 @@ def kept_rows(M: int, rows: tuple, keep: NDArray, trust: tuple | None, pair_h: N
     return Rows(**stored, pair_h=pair_h, n_pairs=n_pairs, n_culled=n_culled)
 
 
-def _support(A: NDArray, lo: NDArray, hi: NDArray) -> NDArray[np.float64]:
-    """The largest value each row takes over its box."""
-    return np.maximum(A * lo, A * hi).sum(axis=-1)
-
-
 def _trust_rows(beta, rho, lo, hi, owner, h, M, cull):
     """Each agent's trust box ``|a - beta|_inf <= rho`` as four rows (the QP keeps the agent's
     own box, so its round-off allowances stay in the box's units), the agent itself as their
@@ -263,7 +276,7 @@ def _trust_rows(beta, rho, lo, hi, owner, h, M, cull):
     b = sign * beta[agent, np.tile([0, 0, 1, 1], M)] + rho[agent]
     h_min = np.full(M, np.inf)
     np.minimum.at(h_min, owner, h)
-    keep = (not cull) | (b < _support(A, lo[agent], hi[agent]))
+    keep = (not cull) | (b < box_support(A, lo[agent], hi[agent]))
     return agent[keep], A[keep], b[keep], agent[keep], h_min[agent[keep]]
 
 
@@ -328,6 +341,15 @@ def backup_radii(
         m = np.maximum(np.abs(lo), np.abs(hi)).max(axis=-1)
         S = remainder(2.0 * m, c, dt) + 2.0 * speed_max * (dt * speed / c + 0.5 * dt * dt)
         rate = gamma * dt
+    return radius_beyond(omega_floor, radii, L, S, rate)
+
+
+def radius_beyond(omega_floor: NDArray, radii: NDArray, L: NDArray, S: NDArray,
+                  rate: float) -> NDArray[np.float64]:  # fmt: skip
+    """The culling radius of a barrier whose h is at least ``|d| - (r_i + r_max) - L_i -
+    L_max`` and whose rows of agent i cannot bind once their share ``omega rate h`` covers
+    ``S_i``: ``r_i + r_max + L_i + L_max + S_i / (omega_floor rate)`` per weight floor
+    (E, N, K); 0 for a floor that is not finite, infinite for a floor of 0."""
     base = radii + radii.max(axis=-1, keepdims=True) + L + L.max(axis=-1, keepdims=True)
     ok = np.isfinite(omega_floor)
     w = np.where(ok & (omega_floor > 0), omega_floor, 1.0)

@@ -36,9 +36,12 @@ from rsvo_env.dynamics.backup_barrier import (
     AgentTerms,
     _trust_rows,
     agent_terms,
+    binding,
     kept_rows,
     obstacle_slots,
+    radius_beyond,
     settled,
+    stopping_reach,
 )
 from rsvo_env.dynamics.barriers import braking_capability
 from rsvo_env.geometry.segments import separate, separation
@@ -103,8 +106,7 @@ def segment_rows(
         box_lo = np.minimum(np.maximum(lo, t.beta - rho[:, None]), t.beta)
         box_hi = np.maximum(np.minimum(hi, t.beta + rho[:, None]), t.beta)
         own, h_all, others_all = (np.concatenate([x, x]) for x in (own, h_all, others_all))
-    keep = np.empty(len(b), dtype=np.bool_)
-    _keep(A, b, own, np.ascontiguousarray(box_lo), np.ascontiguousarray(box_hi), cull, keep)
+    keep = binding(A, b, own, box_lo, box_hi, cull)
     trust = None if dt is None else _trust_rows(t.beta, rho, lo, hi, own, h_all, M, cull)
     return kept_rows(M, (own, A, b, others_all, h_all), keep, trust, h, len(I)), obstacle_h
 
@@ -131,22 +133,6 @@ def _pair_terms(positions, I, J, reach, L, radii, weights, rate, settle, e, sigm
         sigma[k], sigma[P + k] = w * hp, (1.0 - w) * hp
 
 
-@njit(cache=True, error_model="numpy")
-def _keep(A, b, own, box_lo, box_hi, cull, keep):
-    """Rows a body at another's point (or on a wall's core) makes undefined become ``0 . a <=
-    -1``, which no action meets: the QP says infeasible. A row is kept if it can bind over its
-    agent's trust box (every row without ``cull``)."""
-    for k in range(len(b)):
-        i = own[k]
-        if not (np.isfinite(A[k, 0]) and np.isfinite(A[k, 1]) and np.isfinite(b[k])):
-            A[k, 0], A[k, 1], b[k] = 0.0, 0.0, -1.0
-            keep[k] = True
-            continue
-        top = max(A[k, 0] * box_lo[i, 0], A[k, 0] * box_hi[i, 0])
-        top += max(A[k, 1] * box_lo[i, 1], A[k, 1] * box_hi[i, 1])
-        keep[k] = (not cull) or b[k] < top
-
-
 def _sampled(t: AgentTerms, own: NDArray, e: NDArray, sigma: NDArray, M: int, dt: float):
     """Rows 1 and 2 (eq. ``seg-rows``) of every directed row, stacked, and each agent's trust
     radius (:func:`_sampled_rows`)."""
@@ -158,7 +144,7 @@ def _sampled(t: AgentTerms, own: NDArray, e: NDArray, sigma: NDArray, M: int, dt
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _slacks(k, i, own, e, sigma, unit, travel, spare, speed, c, dt):
+def _slacks(k, i, e, sigma, unit, travel, spare, speed, c, dt):
     """Directed row k of agent i: ``n.v_hat`` and the slacks of rows 1 and 2 at the backup
     before the trust box. Sums of products of terms >= 0, none a difference: the backup moves
     the near end by ``travel`` along the segment and the far end back by ``spare``;
@@ -189,7 +175,7 @@ def _sampled_rows(own, e, sigma, unit, travel, spare, speed, c, beta, rho_full, 
         rho[i] = np.inf
     for k in range(K):
         i = own[k]
-        nv, _, tau2 = _slacks(k, i, own, e, sigma, unit, travel, spare, speed, c, dt)
+        nv, _, tau2 = _slacks(k, i, e, sigma, unit, travel, spare, speed, c, dt)
         if nv < 0 and kap[i] > 0:
             limit = max(tau2, 0.0) / (-nv * kap[i])
             rho[i] = min(rho[i], 0.0 if np.isnan(limit) else limit)
@@ -198,7 +184,7 @@ def _sampled_rows(own, e, sigma, unit, travel, spare, speed, c, beta, rho_full, 
     a1 = 0.5 * dt * dt
     for k in range(K):
         i = own[k]
-        nv, tau1, tau2 = _slacks(k, i, own, e, sigma, unit, travel, spare, speed, c, dt)
+        nv, tau1, tau2 = _slacks(k, i, e, sigma, unit, travel, spare, speed, c, dt)
         Ki = (w_beta[i] + np.sqrt(2.0) * dt * rho[i]) / (2.0 * c[i]) + 0.5 * dt
         a2 = a1 + dt * Ki
         A[k, 0], A[k, 1] = -a1 * e[k, 0], -a1 * e[k, 1]
@@ -244,7 +230,6 @@ def segment_radii(
     time ``S_i = s_i (1 + |U_i| / c_i)``, as the backup barrier's."""
     c = braking_capability(lo, hi)
     speed = np.sqrt((velocities * velocities).sum(axis=-1))
-    L = speed * speed / (2.0 * c) + (0.0 if dt is None else 0.5 * dt * speed)
     if dt is None:
         S, rate = speed * (1.0 + speed_max / c), gamma
     else:
@@ -252,9 +237,4 @@ def segment_radii(
         A2 = dt * dt + dt * (speed + 2.0 * _SQRT2 * dt * m) / (2.0 * c)
         S = _SQRT2 * dt * speed * 2.0 * m / (2.0 * c) + 2.0 * speed_max * A2
         rate = gamma * dt
-    base = radii + radii.max(axis=-1, keepdims=True) + L + L.max(axis=-1, keepdims=True)
-    ok = np.isfinite(omega_floor)
-    w = np.where(ok & (omega_floor > 0), omega_floor, 1.0)
-    r = base[..., None] + S[..., None] / (w * rate)
-    r = np.where(omega_floor > 0, r * (1.0 + 1e-9), np.inf)
-    return np.where(ok, r, 0.0)
+    return radius_beyond(omega_floor, radii, stopping_reach(speed, c, dt), S, rate)
