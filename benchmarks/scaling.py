@@ -179,11 +179,12 @@ class Unicycle:
     ``(R + 4 l) / R`` so the look-ahead points start apart; nominal: full speed toward the
     goal, turning at ``K_W`` times the heading error."""
 
-    GAMMA, LOOKAHEAD, W_MAX, K_W = 2.0, 0.2, 3.0, 2.0
+    LOOKAHEAD, W_MAX, K_W = 0.2, 3.0, 2.0
 
-    def __init__(self, n: int, spread: bool) -> None:
+    def __init__(self, n: int, spread: bool, gamma: float | None = None) -> None:
         self.sc, p, goals = crowd_start(n)
         par = self.sc.params
+        self.gamma = par["gamma"] if gamma is None else gamma
         self.R, self.v_max = par["safety_radius"], par["u_max"]
         grow = (self.R + 4.0 * self.LOOKAHEAD) / self.R
         centre = p.mean(axis=0)
@@ -192,7 +193,7 @@ class Unicycle:
         self.th = np.arctan2(d[:, 1], d[:, 0])
         self.theta = scores(n, spread)
         self.flt = SafetyFilter(
-            FilterConfig(gamma=self.GAMMA, safety_radius=self.R, u_max=self.v_max, dt=DT,
+            FilterConfig(gamma=self.gamma, safety_radius=self.R, u_max=self.v_max, dt=DT,
                          dynamics="unicycle", lookahead=self.LOOKAHEAD, w_max=self.W_MAX)
         )  # fmt: skip
         self.agent_steps = self.infeasible = self.mismatches = self.checks = 0
@@ -214,6 +215,12 @@ class Unicycle:
         self.agent_steps += self.last.feasible.size
         self.infeasible += int((~self.last.feasible).sum())
         self.min_distance = min(self.min_distance, float(nearest_distance(self.p).min()))
+
+
+UNICYCLE_GAMMAS = (
+    ("unicycle, gamma 10 (the single integrator's)", None),
+    ("unicycle, gamma 2 (the double integrator's)", DoubleIntegrator.GAMMA),
+)
 
 
 def timed(sim, steps: int, after=None) -> float:
@@ -331,13 +338,14 @@ def double_integrator_rows(blocks: int) -> list[dict]:
                 }
             )
             print(di[-1], flush=True)
-        uni, si = Unicycle(n, spread=True), Ours(n, spread=True)
-        t = alternate({"di": uni, "si": si}, n, 40 if n <= 100 else 10, blocks,
-                      {"di": lambda uni=uni: uni.check(False)})  # fmt: skip
-        di.append({"n": n, "barrier": "unicycle (look-ahead points)", "di": t["di"],
-                   "si": t["si"], "agent_steps": uni.agent_steps, "infeasible": uni.infeasible,
-                   "checks": 0, "mismatches": 0, "min_distance": uni.min_distance})  # fmt: skip
-        print(di[-1], flush=True)
+        for label, gamma in UNICYCLE_GAMMAS:  # a smaller gamma widens every culling radius
+            uni, si = Unicycle(n, spread=True, gamma=gamma), Ours(n, spread=True)
+            t = alternate({"di": uni, "si": si}, n, 40 if n <= 100 else 10, blocks,
+                          {"di": lambda uni=uni: uni.check(False)})  # fmt: skip
+            di.append({"n": n, "barrier": label, "di": t["di"], "si": t["si"],
+                       "agent_steps": uni.agent_steps, "infeasible": uni.infeasible,
+                       "checks": 0, "mismatches": 0, "min_distance": uni.min_distance})  # fmt: skip
+            print(di[-1], flush=True)
     return di
 
 

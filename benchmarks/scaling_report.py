@@ -26,10 +26,12 @@ def plot(rows: list[dict], di: list[dict], path: Path) -> None:
         if pts:
             ax.plot(*zip(*pts, strict=True), style, label=label)
     for barrier, style in (("segment", "P-"), ("backup", "D:"), ("braking", "x:"),
-                           ("unicycle (look-ahead points)", "v-")):  # fmt: skip
+                           ("unicycle, gamma 10 (the single integrator's)", "v-"),
+                           ("unicycle, gamma 2 (the double integrator's)", "^:")):  # fmt: skip
         pts = [(d["n"], d["di"]) for d in di if d.get("barrier", "braking") == barrier]
         if pts:
-            label = (f"double integrator, {barrier} barrier" if barrier[0] != "u" else barrier)
+            label = (f"double integrator, {barrier} barrier" if barrier[0] != "u"
+                     else barrier.split(" (")[0])  # fmt: skip
             ax.plot(*zip(*pts, strict=True), style, label=f"{label}, theta 1..10")
     # the double integrator's own reference: its ratios are to this run, not to section 1's
     ref = {d["n"]: d["si"] for d in di if d.get("barrier") == "segment"}
@@ -45,7 +47,7 @@ def plot(rows: list[dict], di: list[dict], path: Path) -> None:
     # below the axes: inside, it hid the double integrator's points
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
     fig.tight_layout()
-    fig.savefig(path)
+    fig.savefig(path, bbox_inches="tight")
     plt.close(fig)
 
 
@@ -59,7 +61,11 @@ def di_section(di: list, DT: float, DoubleIntegrator) -> list[str]:
         " the box); the stopping-segment barrier (the default, `docs/double_integrator.md`),"
         " the backup barrier (the stopping disk) and the braking barrier with the capability"
         " split. Nominal: a = 2 (v_des - v) with v_des the"
-        " move-to-goal command. Against the single integrator on the same crowd and theta in"
+        " move-to-goal command. The unicycles (look-ahead l = 0.2 m, w_max = 3 rad/s, their"
+        " crowd spread so the look-ahead points start apart) run the single integrator's rows"
+        " on their look-ahead points, at the single integrator's gamma and at the double"
+        " integrator's; nominal: full speed toward the goal, turning at twice the heading"
+        " error. Against the single integrator on the same crowd and theta in"
         " the same run, blocks alternating. Every 20th step the actions and flags are"
         " recomputed with all pairs. Rerun this section alone:"
         " `python benchmarks/scaling.py --di-only`.",

@@ -5,11 +5,13 @@ motion under the look-ahead hold, and obstacles hold as for the single integrato
 import numpy as np
 import pytest
 
-from rsvo_env.dynamics import unicycle_step
-from rsvo_env.dynamics.unicycle import heading_vectors
+from rsvo_env.dynamics import barriers, unicycle_step
+from rsvo_env.dynamics.unicycle import heading_vectors, rotate_rows
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
+from rsvo_env.geometry.bodies import Bodies
 from rsvo_env.geometry.obstacles import Obstacles
+from rsvo_env.qp import exact
 
 V_MAX, W_MAX = 1.0, 2.0
 
@@ -152,21 +154,53 @@ def test_unicycle_config_is_checked():
         flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), u_max=[0.05, 1.0])
 
 
-def test_culled_unicycle_filter_equals_all_pairs():
+def every_row(flt, p, th, nom, theta, radii, holo):
+    """The definition: the single integrator's rows of every pair on the look-ahead points
+    (bodies grown by l), turned into each agent's body frame, nothing culled; the QP's
+    solution as (v, w)."""
+    cfg, n = flt.config, len(p)
+    bodies = Bodies.of(cfg, 1, n, radii)
+    if holo is not None:
+        bodies = bodies.with_holonomic(holo, cfg.u_max, cfg.lookahead)
+    q, nom_b, row_bodies, rotation = cfg.model.lift(cfg, p[None], nom[None], bodies, th[None])
+    I, J = pairs.all_pairs(n)
+    rows = barriers.single_integrator_rows(
+        q[0], flt.pair_weights(theta, None, I, J), I, J, cfg.gamma, row_bodies.radii,
+        row_bodies.lo, row_bodies.hi, cull=False,
+    )  # fmt: skip
+    A = rotate_rows(rows.flat_A, rows.owner, rotation)
+    u = exact.solve_csr(nom_b[0], A, rows.flat_b, rows.offsets, bodies.lo, bodies.hi)[0]
+    return cfg.model.lower(cfg, u, bodies)
+
+
+@pytest.mark.parametrize("mixed", [False, True])
+def test_culled_unicycle_filter_equals_all_pairs(mixed):
+    """The search by each agent's radius and its nominal's disk (the QP projects (v, l w)
+    onto a box that holds 0: ``rsvo_env.filter.projection_disk``) keeps every row that binds,
+    single integrators among the unicycles too."""
     p, th, goals, theta, radii = crowd(300, 4)
     l = 0.06
+    holo = (np.arange(300) % 3 == 0) if mixed else None
     kw = dict(dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX, gamma=10.0, dt=0.05)
     culled = SafetyFilter(FilterConfig(**kw))
     every = SafetyFilter(FilterConfig(**kw, neighbor_radius=1e9))  # every pair within 1e9
     bound = 0
     for _ in range(15):
         nom = nominal(p, th, goals, l, V_MAX)
-        a = culled.filter(p, nom, theta, headings=th, radii=radii)
-        b = every.filter(p, nom, theta, headings=th, radii=radii)
+        if mixed:
+            c = np.clip(goals - p, -V_MAX / 2, V_MAX / 2)
+            nom[holo] = c[holo]
+        a = culled.filter(p, nom, theta, headings=th, radii=radii, holonomic=holo)
+        b = every.filter(p, nom, theta, headings=th, radii=radii, holonomic=holo)
         assert b.rows.n_pairs == 300 * 299 // 2 > a.rows.n_pairs
         np.testing.assert_allclose(a.actions, b.actions, rtol=0, atol=1e-12 * W_MAX)
+        want = every_row(culled, p, th, nom, theta, radii, holo)
+        np.testing.assert_allclose(a.actions, want, rtol=0, atol=1e-12 * W_MAX)
         bound += int(a.active.sum())
-        p, th = unicycle_step(p, th, a.actions, l, 0.05)
+        if mixed:
+            p, th = step_mixed(p, th, a.actions, holo, l, 0.05)
+        else:
+            p, th = unicycle_step(p, th, a.actions, l, 0.05)
     assert bound > 0
 
 

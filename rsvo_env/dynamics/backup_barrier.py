@@ -211,7 +211,9 @@ def backup_rows(
     else:
         b = slack
     keep = binding(A, b, owner_all, box_lo, box_hi, cull)
-    trust = None if dt is None else _trust_rows(t.beta, rho, lo, hi, owner_all, h_all, M, cull)
+    trust = None
+    if dt is not None:
+        trust = _trust_rows(t.beta, rho, lo, hi, smallest_by_owner(owner_all, h_all, M), M, cull)
     rows = kept_rows(M, (owner_all, A, b, others_all, h_all), keep, trust, h, len(I))
     return rows, obstacle_h
 
@@ -253,29 +255,36 @@ def obstacle_slots(positions: NDArray, capsules: NDArray, n: int):
     return agent, caps[agent // n, slot], near, -1 - slot
 
 
-def kept_rows(M: int, rows: tuple, keep: NDArray, trust: tuple | None, pair_h: NDArray,
-              n_pairs: int) -> Rows:  # fmt: skip
-    """The barrier's rows (owner, A, b, neighbour, h) where ``keep``, then each agent's trust
-    rows (``_trust_rows``, None in continuous time), stored by agent."""
-    parts = [tuple(x[keep] for x in rows)]
+def kept_rows(M: int, rows: tuple, keep: NDArray | None, trust: tuple | None, pair_h: NDArray,
+              n_pairs: int, examined: int | None = None) -> Rows:  # fmt: skip
+    """The barrier's rows (owner, A, b, neighbour, h) where ``keep`` (None: ``rows`` are the
+    kept ones, of ``examined``), then each agent's trust rows (``_trust_rows``, None in
+    continuous time), stored by agent."""
+    parts = [rows if keep is None else tuple(x[keep] for x in rows)]
     if trust is not None:
         parts.append(trust)
     owner_k, A_k, b_k, other_k, h_k = (np.concatenate(c) for c in zip(*parts, strict=True))
     stored = _store(M, owner_k, A_k, b_k, other_k, h_k)
-    n_culled = len(keep) + (4 * M if trust is not None else 0) - len(b_k)
+    examined = len(keep) if keep is not None else examined
+    n_culled = examined + (4 * M if trust is not None else 0) - len(b_k)
     return Rows(**stored, pair_h=pair_h, n_pairs=n_pairs, n_culled=n_culled)
 
 
-def _trust_rows(beta, rho, lo, hi, owner, h, M, cull):
+def smallest_by_owner(owner: NDArray, h: NDArray, M: int) -> NDArray[np.float64]:
+    """(M,) each agent's smallest h over its rows (inf without one)."""
+    h_min = np.full(M, np.inf)
+    np.minimum.at(h_min, owner, h)
+    return h_min
+
+
+def _trust_rows(beta, rho, lo, hi, h_min, M, cull):
     """Each agent's trust box ``|a - beta|_inf <= rho`` as four rows (the QP keeps the agent's
     own box, so its round-off allowances stay in the box's units), the agent itself as their
-    neighbour, its smallest h as their h; those the box makes redundant culled."""
+    neighbour, its smallest h (``h_min``) as their h; those the box makes redundant culled."""
     A = np.tile(np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]]), (M, 1))
     sign = A.sum(axis=-1)
     agent = np.repeat(np.arange(M), 4)
     b = sign * beta[agent, np.tile([0, 0, 1, 1], M)] + rho[agent]
-    h_min = np.full(M, np.inf)
-    np.minimum.at(h_min, owner, h)
     keep = (not cull) | (b < box_support(A, lo[agent], hi[agent]))
     return agent[keep], A[keep], b[keep], agent[keep], h_min[agent[keep]]
 

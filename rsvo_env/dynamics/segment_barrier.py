@@ -100,15 +100,15 @@ def segment_rows(
     h_all, others_all = np.concatenate(hs), np.concatenate(others)
     if dt is None:
         A, b = _continuous(t, own, e_all, sigma)
-        box_lo, box_hi, rho = lo, hi, None
-    else:
-        A, b, rho = _sampled(t, own, e_all, sigma, M, dt)
-        box_lo = np.minimum(np.maximum(lo, t.beta - rho[:, None]), t.beta)
-        box_hi = np.maximum(np.minimum(hi, t.beta + rho[:, None]), t.beta)
-        own, h_all, others_all = (np.concatenate([x, x]) for x in (own, h_all, others_all))
-    keep = binding(A, b, own, box_lo, box_hi, cull)
-    trust = None if dt is None else _trust_rows(t.beta, rho, lo, hi, own, h_all, M, cull)
-    return kept_rows(M, (own, A, b, others_all, h_all), keep, trust, h, len(I)), obstacle_h
+        keep = binding(A, b, own, lo, hi, cull)
+        return kept_rows(M, (own, A, b, others_all, h_all), keep, None, h, len(I)), obstacle_h
+    terms = (t.unit, t.travel, t.spare, t.speed, t.c, np.ascontiguousarray(t.beta), t.rho_full)
+    rho, h_min, *kept = _sampled_rows(
+        own, np.ascontiguousarray(e_all), sigma, h_all, others_all, *terms,
+        np.ascontiguousarray(lo), np.ascontiguousarray(hi), dt, TRUST_SHRINK, cull,
+    )  # fmt: skip
+    trust = _trust_rows(t.beta, rho, lo, hi, h_min, M, cull)
+    return kept_rows(M, tuple(kept), None, trust, h, len(I), 2 * len(own)), obstacle_h
 
 
 @njit(cache=True, error_model="numpy")
@@ -133,69 +133,88 @@ def _pair_terms(positions, I, J, reach, L, radii, weights, rate, settle, e, sigm
         sigma[k], sigma[P + k] = w * hp, (1.0 - w) * hp
 
 
-def _sampled(t: AgentTerms, own: NDArray, e: NDArray, sigma: NDArray, M: int, dt: float):
-    """Rows 1 and 2 (eq. ``seg-rows``) of every directed row, stacked, and each agent's trust
-    radius (:func:`_sampled_rows`)."""
-    K = len(own)
-    A, b, rho = np.empty((2 * K, 2)), np.empty(2 * K), np.empty(M)
-    terms = (t.unit, t.travel, t.spare, t.speed, t.c, np.ascontiguousarray(t.beta), t.rho_full)
-    _sampled_rows(own, np.ascontiguousarray(e), sigma, *terms, dt, TRUST_SHRINK, A, b, rho)
-    return A, b, rho
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _slacks(k, i, e, sigma, unit, travel, spare, speed, c, dt):
-    """Directed row k of agent i: ``n.v_hat`` and the slacks of rows 1 and 2 at the backup
-    before the trust box. Sums of products of terms >= 0, none a difference: the backup moves
-    the near end by ``travel`` along the segment and the far end back by ``spare``;
-    ``L - travel`` is ``(s - c dt)^2 / (2 c) + s dt / 2`` while braking, ``spare`` when it
-    stops within the step."""
-    nv = e[k, 0] * unit[i, 0] + e[k, 1] * unit[i, 1]
-    if nv >= 0:
-        return nv, sigma[k] + nv * travel[i], sigma[k] + nv * travel[i]
-    s, ci = speed[i], c[i]
-    behind = (s - ci * dt) ** 2 / (2.0 * ci) + 0.5 * s * dt if s >= ci * dt else spare[i]
-    return nv, sigma[k] - nv * behind, sigma[k] - nv * spare[i]
-
-
 @njit(cache=True, error_model="numpy")
-def _sampled_rows(own, e, sigma, unit, travel, spare, speed, c, beta, rho_full, dt, shrink,
-                  A, b, rho):  # fmt: skip
-    """Row 1 of directed row k into ``A[k], b[k]``, row 2 into ``A[K + k], b[K + k]``; each
-    agent's trust radius into ``rho``: the largest (to ``rho_full``) with
-    ``|n.v_hat| kappa rho <= tau2`` where the far end leads (eq. ``seg-remainder``,
-    ``kappa = sqrt 2 dt |w_beta| / (2 c)``), shrunk by a relative hair so the backup keeps room
-    for rounding. The slacks are computed twice (:func:`_slacks`) rather than stored: the
-    radius needs every row of the agent first, and fresh memory costs more than the sums."""
-    K, M = len(own), len(rho)
-    w_beta, kap = np.empty(M), np.empty(M)
+def _sampled_rows(own, e, sigma, h, other, unit, travel, spare, speed, c, beta, rho_full, lo, hi,
+                  dt, shrink, cull):  # fmt: skip
+    """Rows 1 and 2 (eq. ``seg-rows``) of every directed row k (agent ``own[k]``, direction
+    ``e[k]``, share ``sigma[k]``), those that can bind over the agent's trust box kept (all of
+    them without ``cull``; an undefined row, of a body at another's centre, becomes
+    ``0 . a <= -1`` and is kept, so the QP says infeasible, as ``backup_barrier.binding``
+    does). Returns each agent's trust radius, its smallest h, and the kept rows as (owner, A,
+    b, neighbour, h): every kept row 1 in k order, then every kept row 2.
+
+    The trust radius is the largest (to ``rho_full``) with ``|n.v_hat| kappa rho <= tau2``
+    where the far end leads (eq. ``seg-remainder``, ``kappa = sqrt 2 dt |w_beta| / (2 c)``),
+    shrunk by a relative hair so the backup keeps room for rounding. The slacks of rows 1 and
+    2 at the backup before the trust box are sums of products of terms >= 0, none a
+    difference: the backup moves the near end by ``travel`` along the segment and the far end
+    back by ``spare``; ``L - travel`` (``behind``) is ``(s - c dt)^2 / (2 c) + s dt / 2`` while
+    braking, ``spare`` when it stops within the step. Both sides of ``n.v_hat >= 0`` are
+    computed and one selected: the sign is a coin toss from row to row, and a branch on it
+    costs more than the sums."""
+    K, M = len(own), len(rho_full)
+    w_beta, kap, behind = np.empty(M), np.empty(M), np.empty(M)
+    K2, a2, rho, h_min = np.empty(M), np.empty(M), np.empty(M), np.full(M, np.inf)
+    box = np.empty((M, 4))
     for i in range(M):
-        w_beta[i] = speed[i] - c[i] * dt if speed[i] >= c[i] * dt else 0.0
-        kap[i] = np.sqrt(2.0) * dt * w_beta[i] / (2.0 * c[i])
+        s, ci = speed[i], c[i]
+        braking = s >= ci * dt
+        w_beta[i] = s - ci * dt if braking else 0.0
+        kap[i] = np.sqrt(2.0) * dt * w_beta[i] / (2.0 * ci)
+        behind[i] = (s - ci * dt) ** 2 / (2.0 * ci) + 0.5 * s * dt if braking else spare[i]
         rho[i] = np.inf
     for k in range(K):
         i = own[k]
-        nv, _, tau2 = _slacks(k, i, e, sigma, unit, travel, spare, speed, c, dt)
-        if nv < 0 and kap[i] > 0:
-            limit = max(tau2, 0.0) / (-nv * kap[i])
-            rho[i] = min(rho[i], 0.0 if np.isnan(limit) else limit)
+        nv = e[k, 0] * unit[i, 0] + e[k, 1] * unit[i, 1]
+        limit = max(sigma[k] - nv * spare[i], 0.0) / (-nv * kap[i])
+        limit = 0.0 if np.isnan(limit) else limit
+        rho[i] = min(rho[i], limit if (nv < 0 and kap[i] > 0) else np.inf)
+        h_min[i] = np.minimum(h_min[i], h[k])
+    a1 = 0.5 * dt * dt
     for i in range(M):
         rho[i] = min(rho_full[i], rho[i] * shrink)
-    a1 = 0.5 * dt * dt
+        K2[i] = (w_beta[i] + np.sqrt(2.0) * dt * rho[i]) / (2.0 * c[i]) + 0.5 * dt
+        a2[i] = a1 + dt * K2[i]
+        for d in range(2):  # the trust box within the agent's own, about beta
+            b_lo = np.minimum(np.maximum(lo[i, d], beta[i, d] - rho[i]), beta[i, d])
+            b_hi = np.maximum(np.minimum(hi[i, d], beta[i, d] + rho[i]), beta[i, d])
+            box[i, 2 * d], box[i, 2 * d + 1] = b_lo, b_hi
+    owner_k, other_k = np.empty(2 * K, dtype=np.int64), np.empty(2 * K, dtype=np.int64)
+    A_k, b_k, h_k = np.empty((2 * K, 2)), np.empty(2 * K), np.empty(2 * K)
+    n1 = 0
+    n2 = K  # the kept rows 2 from K on, moved behind the rows 1 at the end
     for k in range(K):
         i = own[k]
-        nv, tau1, tau2 = _slacks(k, i, e, sigma, unit, travel, spare, speed, c, dt)
-        Ki = (w_beta[i] + np.sqrt(2.0) * dt * rho[i]) / (2.0 * c[i]) + 0.5 * dt
-        a2 = a1 + dt * Ki
-        A[k, 0], A[k, 1] = -a1 * e[k, 0], -a1 * e[k, 1]
-        A[K + k, 0], A[K + k, 1] = -a2 * e[k, 0], -a2 * e[k, 1]
+        nv = e[k, 0] * unit[i, 0] + e[k, 1] * unit[i, 1]
+        lead = nv < 0
+        ahead = sigma[k] + nv * travel[i]
         # row 2 at the backup: n.w_beta = nv |w_beta|, and W - |w_beta| = sqrt 2 dt rho
-        if nv >= 0:
-            tau2 += Ki * nv * w_beta[i]
-        else:
-            tau2 += nv * kap[i] * rho[i]
-        b[k] = A[k, 0] * beta[i, 0] + A[k, 1] * beta[i, 1] + tau1
-        b[K + k] = A[K + k, 0] * beta[i, 0] + A[K + k, 1] * beta[i, 1] + tau2
+        tau1 = sigma[k] - nv * behind[i] if lead else ahead
+        tau2 = (sigma[k] - nv * spare[i]) + nv * kap[i] * rho[i] if lead else (
+            ahead + K2[i] * nv * w_beta[i])
+        for row in range(2):
+            a = a1 if row == 0 else a2[i]
+            Ax, Ay = -a * e[k, 0], -a * e[k, 1]
+            bk = Ax * beta[i, 0] + Ay * beta[i, 1] + (tau1 if row == 0 else tau2)
+            if not (np.isfinite(Ax) and np.isfinite(Ay) and np.isfinite(bk)):
+                Ax, Ay, bk = 0.0, 0.0, -1.0
+                keep = True
+            else:
+                top = max(Ax * box[i, 0], Ax * box[i, 1]) + max(Ay * box[i, 2], Ay * box[i, 3])
+                keep = (not cull) or bk < top
+            if keep:
+                q = n1 if row == 0 else n2
+                owner_k[q], other_k[q], h_k[q] = i, other[k], h[k]
+                A_k[q, 0], A_k[q, 1], b_k[q] = Ax, Ay, bk
+                if row == 0:
+                    n1 += 1
+                else:
+                    n2 += 1
+    m = n2 - K
+    owner_k[n1 : n1 + m], other_k[n1 : n1 + m] = owner_k[K:n2], other_k[K:n2]
+    A_k[n1 : n1 + m], b_k[n1 : n1 + m], h_k[n1 : n1 + m] = A_k[K:n2], b_k[K:n2], h_k[K:n2]
+    c1 = n1 + m
+    return rho, h_min, owner_k[:c1], A_k[:c1], b_k[:c1], other_k[:c1], h_k[:c1]
 
 
 def _continuous(t: AgentTerms, own: NDArray, e: NDArray, sigma: NDArray):

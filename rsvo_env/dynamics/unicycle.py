@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from rsvo_env.dynamics.model import Dynamics
 from rsvo_env.dynamics.single_integrator import SingleIntegrator
 from rsvo_env.geometry.bodies import Bodies
+from rsvo_env.util.planar import turn
 from rsvo_env.util.validation import real_array
 
 if TYPE_CHECKING:
@@ -31,11 +32,6 @@ if TYPE_CHECKING:
 def heading_vectors(headings: NDArray) -> NDArray[np.float64]:
     """(..., 2) the unit vectors ``(cos theta, sin theta)``."""
     return np.stack([np.cos(headings), np.sin(headings)], axis=-1)
-
-
-def turn(v: NDArray, cos: NDArray, sin: NDArray) -> NDArray[np.float64]:
-    """Vectors (..., 2) turned by the angles of (cos, sin): body frame to world frame."""
-    return np.stack([cos * v[..., 0] - sin * v[..., 1], sin * v[..., 0] + cos * v[..., 1]], -1)
 
 
 def unicycle_step(
@@ -65,6 +61,8 @@ class Unicycle(Dynamics):
     limit_name = "u_max"
     state_fields = ("headings",)
     per_agent_bodies = True
+    # its QP is the projection of (v, l w) onto a box that holds 0 and the turned rows
+    nominal_disk = True
     # the look-ahead distance l and the turn-rate bound
     scenario_defaults = {"lookahead": 0.2, "w_max": 3.0}
     scenario_positive = ("lookahead", "w_max")
@@ -182,6 +180,9 @@ class Unicycle(Dynamics):
         radii = bodies.radii + l
         r_max = radii.reshape(len(bodies.r_max), -1).max(axis=1)
         row_bodies = Bodies.made(radii, centre - extent, centre + extent, r_max, False)
+        # the rotated box's largest input is the body-frame box's (a turn keeps norms), not
+        # the corner of the wider box that holds it: the culling radii take the smaller
+        row_bodies = replace(row_bodies, speed=bodies.speed)
         return q, nominal_b.reshape(nominal.shape), row_bodies, np.stack([cos, sin], -1)
 
     def lower(self, cfg, actions, bodies):

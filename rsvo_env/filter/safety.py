@@ -37,7 +37,7 @@ from rsvo_env.responsibility.svo import (
     weight_matrix,
 )
 from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
-from rsvo_env.util.planar import norm
+from rsvo_env.util.planar import norm, turn
 from rsvo_env.util.validation import check_theta, check_vectors, real_array
 
 
@@ -243,8 +243,11 @@ class SafetyFilter:
         positions, solve_nominal, bodies, rotation = cfg.model.lift(
             cfg, positions, nominal, bodies, **own
         )
+        disk_nominal = solve_nominal
         if rotation is not None:  # the rows live on points of the model's own (look-ahead)
             nearest = None
+            # the rows are built in the world's frame, where the QP's disk is the turned one
+            disk_nominal = turn(solve_nominal, *np.moveaxis(rotation.reshape(E, n, 2), -1, 0))
         pos = positions.reshape(E * n, 2)
         vel = None if velocities is None else velocities.reshape(E * n, 2)
         caps = obstacles if obstacles is None or obstacles.ndim == 3 else obstacles[None]
@@ -270,7 +273,7 @@ class SafetyFilter:
                     self._scaled_floor = (floor, floor[0] * cfg.gamma)
                 likely = self._exempt if self._exempt.shape == (E * n,) else None
                 I, J, rows, obstacle_h, reach, self._exempt = projection_disk.search(
-                    cfg, positions, nominal, floor, self._scaled_floor[1], radii, bodies,
+                    cfg, positions, disk_nominal, floor, self._scaled_floor[1], radii, bodies,
                     rows_of, likely,
                 )  # fmt: skip
             else:
@@ -282,7 +285,7 @@ class SafetyFilter:
             rows, obstacle_h = rows_of(I, J)
         if cfg.model.nominal_disk:
             exempt = projection_disk.negative_rows(rows.offsets, rows.flat_b)
-            rows = projection_disk.cull(rows, nominal.reshape(-1, 2), exempt)
+            rows = projection_disk.cull(rows, solve_nominal.reshape(-1, 2), exempt)
         actions, feasible, active, violation = solvers.solve(
             cfg.solver, solve_nominal.reshape(E * n, 2), rows.flat_A, rows.flat_b, rows.offsets,
             solve_box.lo, solve_box.hi,

@@ -37,6 +37,12 @@ def rotate(u: NDArray[np.float64], angle: NDArray[np.float64] | float) -> NDArra
     return out.reshape(np.shape(u))
 
 
+def turn(v: NDArray, cos: NDArray, sin: NDArray) -> NDArray[np.float64]:
+    """Vectors (..., 2) turned by the angles of (cos, sin) (broadcast against v's leading
+    shape): a body frame's vectors in the world's."""
+    return np.stack([cos * v[..., 0] - sin * v[..., 1], sin * v[..., 0] + cos * v[..., 1]], -1)
+
+
 @njit(cache=True, inline="always")
 def clip2(x, y, limit):
     """(x, y) scaled down to norm <= limit, overflow-safe (see :func:`clip_norm`)."""
