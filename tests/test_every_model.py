@@ -167,7 +167,8 @@ def test_the_steered_velocity_is_the_look_ahead_points_own(seed):
 @pytest.mark.parametrize("model", MODELS)
 def test_the_scripted_controller_of_a_single_integrator_scene_is_unchanged_by_the_hooks(model):
     """Move-to-goal through the model's tracking: the single integrator's is the velocity
-    itself, the double integrator's k_v (v_goal - v) clipped to a_max."""
+    itself, the double integrator's k_v (v_goal - v) clipped to a_max, v_goal's norm capped at
+    sqrt(a_max d), the speed from which braking at a_max / 2 stops at the goal (d away)."""
     env = BatchedEnv("crowd", num_envs=2, num_agents=6, dynamics=model, nominal="move_to_goal")
     env.reset(seed=[0, 1])
     for _ in range(30):
@@ -179,9 +180,14 @@ def test_the_scripted_controller_of_a_single_integrator_scene_is_unchanged_by_th
     if model == "single_integrator":
         assert np.array_equal(got, v_goal)
     elif model == "double_integrator":
-        a = 2.0 * (v_goal - s.velocities)
+        a_max, k_v = sc.params["a_max"], sc.params["k_v"]
+        cap = np.sqrt(a_max * np.linalg.norm(s.goals - s.positions, axis=-1, keepdims=True))
+        speed = np.linalg.norm(v_goal, axis=-1, keepdims=True)
+        assert (speed > cap).any() and (speed < cap).any()  # the cap and the free approach
+        want = v_goal * np.minimum(1.0, cap / speed)
+        a = k_v * (want - s.velocities)
         n = np.linalg.norm(a, axis=-1, keepdims=True)
-        assert np.allclose(got, a / np.maximum(n, 1.0), atol=1e-12)
+        assert np.allclose(got, a * np.minimum(1.0, a_max / n), atol=1e-12 * a_max)
     else:
         assert got.shape == (2, 6, 2) and (got[..., 0] >= 0).all()
 

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rsvo_env.dynamics.model import Dynamics
-from rsvo_env.util.planar import clip_each
+from rsvo_env.util.planar import clip_each, norm
 
 if TYPE_CHECKING:
     from rsvo_env.qp.rows import Rows
@@ -44,6 +44,9 @@ def check_sampled_pairs(dt: float, bodies: Any, I: NDArray, J: NDArray) -> None:
 
 # the barriers whose rows are met by every agent's backup at once (docs/double_integrator.md)
 BACKED = ("segment", "backup")
+# the scripted controller approaches its goal at the speed from which braking at this share of
+# the acceleration bound stops there: the rest of the bound is left to the filter and the lag
+BRAKE_SHARE = 0.5
 
 
 def _backed(barrier: str):
@@ -69,13 +72,19 @@ class DoubleIntegrator(Dynamics):
     per_agent_bodies = True
     # a_max the acceleration bound; the scripted controller tracks its velocity with gain k_v
     # (the scene's u_max is then the speed it asks, not a bound)
-    scenario_defaults = {"a_max": 1.0, "k_v": 4.0}
+    scenario_defaults = {"a_max": 2.0, "k_v": 8.0}
     scenario_positive = ("a_max", "k_v")
 
     def track(self, state, velocity, params, limits):
-        """``a = k_v (v_wanted - v)``, its norm clipped to the acceleration bound."""
-        u = params["k_v"] * (velocity - state.velocities)
-        return clip_each(u, params["a_max"] if limits is None else limits)
+        """``a = k_v (v_wanted - v)``, its norm clipped to the acceleration bound, with
+        ``v_wanted``'s norm capped at ``sqrt(a_max d)`` (``d`` the distance to the goal): the
+        speed from which braking at half the bound stops at the goal. Without the cap a
+        double integrator reaches its goal at full speed, overshoots and circles it."""
+        a_max = params["a_max"] if limits is None else limits
+        cap = np.sqrt(2.0 * BRAKE_SHARE * np.asarray(a_max) * norm(state.goals - state.positions))
+        speed = norm(velocity)
+        scale = np.where(speed > cap, cap / np.where(speed > 0, speed, 1.0), 1.0)
+        return clip_each(params["k_v"] * (velocity * scale[..., None] - state.velocities), a_max)
 
     def step(self, positions, velocities, u, dt):
         return double_integrator_step(positions, velocities, u, dt)

@@ -114,7 +114,8 @@ class Scene(Scenario):
 
 class Doorway(Scenario):
     """Two groups on either side of a wall cross through its gap to the other side (the
-    bottleneck of crowd simulators). The scripted controller heads for the gap, then the goal."""
+    bottleneck of crowd simulators). The scripted controller comes level with its lane of the
+    gap on its own side, heads through the gap, then for the goal."""
 
     name = "doorway"
     models = dynamics.NAMES
@@ -174,6 +175,13 @@ class Doorway(Scenario):
         # right-hand traffic: each direction keeps to its own half of the gap, just past it
         lane = -side * 0.25 * p["gap"]
         mouth = np.stack([side * p["safety_radius"], lane], -1)
+        # an agent not yet level with its lane first comes level with it on its own side: the
+        # straight line to the mouth would press it into the wall, where a double integrator's
+        # stopping segment pins it (docs/liveness.md)
+        R = p["safety_radius"]
+        level = np.abs(x[..., 1] - lane) <= 0.5 * p["gap"] - 0.5 * R
+        near = np.stack([-side * 1.5 * R, lane], -1)
+        mouth = np.where(level[..., None], mouth, near)
         target = np.where(crossed[..., None], goals, mouth)
         rh = state.rh_active if self.turns(right_hand) else None
         return self.command(
