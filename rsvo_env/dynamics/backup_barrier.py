@@ -234,13 +234,20 @@ def binding(A: NDArray, b: NDArray, owner: NDArray, box_lo: NDArray, box_hi: NDA
 def _binding(A, b, owner, box_lo, box_hi, cull, keep):
     for k in range(len(b)):
         i = owner[k]
-        if not (np.isfinite(A[k, 0]) and np.isfinite(A[k, 1]) and np.isfinite(b[k])):
-            A[k, 0], A[k, 1], b[k] = 0.0, 0.0, -1.0
-            keep[k] = True
-            continue
-        top = max(A[k, 0] * box_lo[i, 0], A[k, 0] * box_hi[i, 0])
-        top += max(A[k, 1] * box_lo[i, 1], A[k, 1] * box_hi[i, 1])
-        keep[k] = (not cull) or b[k] < top
+        A[k, 0], A[k, 1], b[k], keep[k] = row_kept(
+            A[k, 0], A[k, 1], b[k], box_lo[i, 0], box_hi[i, 0], box_lo[i, 1], box_hi[i, 1], cull
+        )
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def row_kept(ax, ay, b, lo_x, hi_x, lo_y, hi_y, cull):
+    """One row ``(ax, ay) . a <= b`` as :func:`binding` keeps it: ``(ax, ay, b, keep)``, an
+    undefined row made ``0 . a <= -1`` and kept, a defined one kept where it can bind over
+    the box ``[lo, hi]`` (or always without ``cull``)."""
+    if not (np.isfinite(ax) and np.isfinite(ay) and np.isfinite(b)):
+        return 0.0, 0.0, -1.0, True
+    top = max(ax * lo_x, ax * hi_x) + max(ay * lo_y, ay * hi_y)
+    return ax, ay, b, (not cull) or b < top
 
 
 def obstacle_slots(positions: NDArray, capsules: NDArray, n: int):

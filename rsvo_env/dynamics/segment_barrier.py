@@ -40,6 +40,7 @@ from rsvo_env.dynamics.backup_barrier import (
     kept_rows,
     obstacle_slots,
     radius_beyond,
+    row_kept,
     settled,
     stopping_reach,
 )
@@ -139,9 +140,9 @@ def _sampled_rows(own, e, sigma, h, other, unit, travel, spare, speed, c, beta, 
     """Rows 1 and 2 (eq. ``seg-rows``) of every directed row k (agent ``own[k]``, direction
     ``e[k]``, share ``sigma[k]``), those that can bind over the agent's trust box kept (all of
     them without ``cull``; an undefined row, of a body at another's centre, becomes
-    ``0 . a <= -1`` and is kept, so the QP says infeasible, as ``backup_barrier.binding``
-    does). Returns each agent's trust radius, its smallest h, and the kept rows as (owner, A,
-    b, neighbour, h): every kept row 1 in k order, then every kept row 2.
+    ``0 . a <= -1`` and is kept, so the QP says infeasible: ``backup_barrier.row_kept``).
+    Returns each agent's trust radius, its smallest h, and the kept rows as (owner, A, b,
+    neighbour, h): every kept row 1 in k order, then every kept row 2.
 
     The trust radius is the largest (to ``rho_full``) with ``|n.v_hat| kappa rho <= tau2``
     where the far end leads (eq. ``seg-remainder``, ``kappa = sqrt 2 dt |w_beta| / (2 c)``),
@@ -196,12 +197,8 @@ def _sampled_rows(own, e, sigma, h, other, unit, travel, spare, speed, c, beta, 
             a = a1 if row == 0 else a2[i]
             Ax, Ay = -a * e[k, 0], -a * e[k, 1]
             bk = Ax * beta[i, 0] + Ay * beta[i, 1] + (tau1 if row == 0 else tau2)
-            if not (np.isfinite(Ax) and np.isfinite(Ay) and np.isfinite(bk)):
-                Ax, Ay, bk = 0.0, 0.0, -1.0
-                keep = True
-            else:
-                top = max(Ax * box[i, 0], Ax * box[i, 1]) + max(Ay * box[i, 2], Ay * box[i, 3])
-                keep = (not cull) or bk < top
+            Ax, Ay, bk, keep = row_kept(Ax, Ay, bk, box[i, 0], box[i, 1], box[i, 2], box[i, 3],
+                                        cull)  # fmt: skip
             if keep:
                 q = n1 if row == 0 else n2
                 owner_k[q], other_k[q], h_k[q] = i, other[k], h[k]
