@@ -173,29 +173,35 @@ def every_row(flt, p, th, nom, theta, radii, holo):
     return cfg.model.lower(cfg, u, bodies)
 
 
-@pytest.mark.parametrize("mixed", [False, True])
-def test_culled_unicycle_filter_equals_all_pairs(mixed):
+@pytest.mark.parametrize(
+    "mixed,scale,gamma",
+    [(False, 1.0, 10.0), (True, 1.0, 10.0), (False, 1e-3, 20.0), (True, 1e3, 20.0)],
+)
+def test_culled_unicycle_filter_equals_all_pairs(mixed, scale, gamma):
     """The search by each agent's radius and its nominal's disk (the QP projects (v, l w)
     onto a box that holds 0: ``rsvo_env.filter.projection_disk``) keeps every row that binds,
-    single integrators among the unicycles too."""
-    p, th, goals, theta, radii = crowd(300, 4)
-    l = 0.06
+    single integrators among the unicycles too, in millimetres and kilometres, up to
+    gamma dt = 1."""
+    p, th, goals, theta, radii = crowd(300, 4, scale)
+    l, v_max = 0.06 * scale, V_MAX * scale
     holo = (np.arange(300) % 3 == 0) if mixed else None
-    kw = dict(dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX, gamma=10.0, dt=0.05)
+    kw = dict(dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=v_max, gamma=gamma, dt=0.05)
     culled = SafetyFilter(FilterConfig(**kw))
     every = SafetyFilter(FilterConfig(**kw, neighbor_radius=1e9))  # every pair within 1e9
     bound = 0
     for _ in range(15):
-        nom = nominal(p, th, goals, l, V_MAX)
+        nom = nominal(p, th, goals, l, v_max)
         if mixed:
-            c = np.clip(goals - p, -V_MAX / 2, V_MAX / 2)
+            c = np.clip(goals - p, -v_max / 2, v_max / 2)
             nom[holo] = c[holo]
         a = culled.filter(p, nom, theta, headings=th, radii=radii, holonomic=holo)
         b = every.filter(p, nom, theta, headings=th, radii=radii, holonomic=holo)
         assert b.rows.n_pairs == 300 * 299 // 2 > a.rows.n_pairs
-        np.testing.assert_allclose(a.actions, b.actions, rtol=0, atol=1e-12 * W_MAX)
+        # each action's own unit: (v, w) in the world's speed and W_MAX
+        unit = np.array([v_max, W_MAX])
+        np.testing.assert_allclose(a.actions / unit, b.actions / unit, rtol=0, atol=1e-12)
         want = every_row(culled, p, th, nom, theta, radii, holo)
-        np.testing.assert_allclose(a.actions, want, rtol=0, atol=1e-12 * W_MAX)
+        np.testing.assert_allclose(a.actions / unit, want / unit, rtol=0, atol=1e-12)
         bound += int(a.active.sum())
         if mixed:
             p, th = step_mixed(p, th, a.actions, holo, l, 0.05)
