@@ -12,7 +12,6 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from rsvo_env.responsibility.svo import (
     Weighting,
@@ -22,7 +21,7 @@ from rsvo_env.responsibility.svo import (
     weight_matrix,
 )
 from rsvo_env.util import grid
-from rsvo_env.util.neighbors import DENSE_MAX_AGENTS, env_offsets
+from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
 
 # (floor (E, N, K), group (E, N), required pairs (P, 2)): see weight_floor and theta_floor
 Floor = tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]
@@ -207,29 +206,21 @@ def candidate_pairs(
     positions: NDArray, radius: float = float("inf")
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Pairs (I < J, flat indices) of agents of the same env that may interact: all pairs, or
-    those within ``radius``. ``positions`` is (E, N, 2); one KD-tree serves every env."""
+    those within ``radius`` (the compiled grid of :mod:`rsvo_env.util.grid`, env by env, for
+    many agents). ``positions`` is (E, N, 2)."""
     E, n = positions.shape[0], positions.shape[1]
     if n < 2:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
-    flat = positions.reshape(-1, 2)
-    if not np.isfinite(radius) or n <= DENSE_MAX_AGENTS:
-        I, J = all_pairs(n, E)
-        if np.isfinite(radius):
-            d = np.linalg.norm(flat[I] - flat[J], axis=1)
-            keep = d <= radius
-            I, J = I[keep], J[keep]
-        return I, J
-    shifted = (positions + env_offsets(positions, radius)).reshape(-1, 2)
-    pairs = cKDTree(shifted).query_pairs(radius, output_type="ndarray")
-    if len(pairs) == 0:
-        empty = np.zeros(0, dtype=np.int64)
-        return empty, empty
-    pairs = np.sort(pairs, axis=1)
-    # A fixed pair order keeps results bit-identical whatever order the tree returns.
-    order = np.lexsort((pairs[:, 1], pairs[:, 0]))
-    pairs = pairs[order]
-    return pairs[:, 0].astype(np.int64), pairs[:, 1].astype(np.int64)
+    if np.isfinite(radius) and radius > 0.0 and n > DENSE_MAX_AGENTS:
+        # the compiled grid: the same pairs, sorted, without a tree's Python-level lists
+        return grid.pairs_within_radii(positions, np.full((E, n), float(radius)))
+    I, J = all_pairs(n, E)
+    if np.isfinite(radius):
+        flat = positions.reshape(-1, 2)
+        keep = np.linalg.norm(flat[I] - flat[J], axis=1) <= radius
+        I, J = I[keep], J[keep]
+    return I, J
 
 
 @njit(cache=True)

@@ -12,8 +12,8 @@ offsets). An empty polygon (one that stays empty when every row is moved out by
 ``FEASIBILITY_TOL`` times the box's extent) is reported (``feasible=False``) and replaced by
 the action that minimises the largest normalised violation ``max_k (a_k u - b_k)/|a_k|`` over
 the box, and among those the one closest to the nominal (the role of ORCA's
-``linearProgram3``). The min-max value is found by bisection on the shift ``t`` of all rows,
-each probe an exact feasibility test, to 1e-13 relative.
+``linearProgram3``): the min-max value ``t`` by Seidel's incremental linear program
+(:mod:`rsvo_env.qp.least_violation`), then the exact projection onto the rows shifted by ``t``.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from rsvo_env.qp import least_violation
 from rsvo_env.util import threads
 
 # Round-off allowances, relative to the problem's scale: a row whose offset is b (unit normal) is
@@ -110,15 +111,6 @@ def _project(nx, ny, rows, nrows, shift, lo0, lo1, hi0, hi1, scale):
 
 
 @njit(cache=True, inline="always")
-def _max_violation(ux, uy, rows, nrows):
-    worst = -np.inf
-    for k in range(nrows):
-        v = rows[k, 0] * ux + rows[k, 1] * uy - rows[k, 2]
-        worst = max(worst, v)
-    return worst
-
-
-@njit(cache=True, inline="always")
 def set_row(rows, k, ax, ay, b):
     """Store row k normalised to a unit normal (a zero row keeps its right side)."""
     norm = np.hypot(ax, ay)
@@ -151,32 +143,16 @@ def solve_rows(nx, ny, rows, nrows, lo0, lo1, hi0, hi1, out):
     ux, uy, ok = _project(nx, ny, rows, nrows, 0.0, lo0, lo1, hi0, hi1, scale)
     violation = 0.0
     if not ok:
-        # Least violation: the smallest shift t of every row that makes the polygon non-empty.
-        # The clipped nominal and the box corners bound it; the best of them is kept in case
-        # the polygon at that shift is a single point (a row through a corner).
+        # Least violation: the smallest shift t of every row that makes the polygon non-empty
+        # (rsvo_env.qp.least_violation), then the point of that polygon closest to the nominal;
+        # the program's own point where rounding leaves the polygon empty or a single point
         bx = min(max(nx, lo0), hi0)
         by = min(max(ny, lo1), hi1)
-        best = _max_violation(bx, by, rows, nrows)
-        for cx in (lo0, hi0):
-            for cy in (lo1, hi1):
-                v = _max_violation(cx, cy, rows, nrows)
-                if v < best:
-                    bx, by, best = cx, cy, v
-        t_hi = max(best, 0.0)
-        t_lo = 0.0
-        for _ in range(200):
-            if t_hi - t_lo <= 1e-13 * (scale + t_hi):
-                break
-            mid = 0.5 * (t_lo + t_hi)
-            _, _, feas = _project(nx, ny, rows, nrows, mid, lo0, lo1, hi0, hi1, scale)
-            if feas:
-                t_hi = mid
-            else:
-                t_lo = mid
-        ux, uy, feas = _project(nx, ny, rows, nrows, t_hi, lo0, lo1, hi0, hi1, scale)
-        violation = _max_violation(ux, uy, rows, nrows) if feas else np.inf
-        if violation > best:
-            ux, uy, violation = bx, by, best
+        t, lx, ly = least_violation.min_max(rows, nrows, lo0, lo1, hi0, hi1, scale, bx, by)
+        ux, uy, feas = _project(nx, ny, rows, nrows, max(t, 0.0), lo0, lo1, hi0, hi1, scale)
+        violation = least_violation.max_violation(ux, uy, rows, nrows) if feas else np.inf
+        if violation > t + FEASIBILITY_TOL * scale:
+            ux, uy, violation = lx, ly, t
         violation = max(violation, 0.0)
         if violation <= FEASIBILITY_TOL * scale:
             ok = True

@@ -75,6 +75,8 @@ def least_violation(
         b_ub=b / norms,
         bounds=[(lo[0], hi[0]), (lo[1], hi[1]), (None, None)],
         method="highs",
+        # HiGHS's default tolerances (1e-7) leave its optimum 1e-7 above the exact one
+        options={"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10},
     )
     if res.status != 0:  # pragma: no cover - a bounded LP over a box always has a solution
         raise RuntimeError(f"least-violation LP failed: {res.message}")
