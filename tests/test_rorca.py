@@ -301,7 +301,7 @@ def test_paired_theta_names_a_bad_count(bad):
 def reference_velocities(x, v, pref, radii, theta, u_max, dt, tau, parked, goals, held, K):
     """R-ORCA assembled from its parts as it was before it became one compiled stage: every
     pair's half-planes (``_half_planes``), ORCA's nearest-K rule by a lexsort, the octagon, the
-    exact CSR solve, the sidestep re-solve, the speed clip. One env (N agents)."""
+    exact solve agent by agent, the sidestep re-solve, the speed clip. One env (N agents)."""
     from rsvo_env.geometry import pairs
     from rsvo_env.qp import exact
 
@@ -320,20 +320,23 @@ def reference_velocities(x, v, pref, radii, theta, u_max, dt, tau, parked, goals
     keep = np.zeros(len(owner), dtype=bool)
     keep[by] = np.arange(len(by)) - first < K
     owner, A, b = owner[keep], A[keep], b[keep]
+    # the octagon's rows normalised as the solver stores a row; the half-planes' normals are
+    # unit as built, and stored as they are
     octagon = np.stack([np.cos(np.arange(8) * np.pi / 4), np.sin(np.arange(8) * np.pi / 4)], -1)
+    norm = np.hypot(octagon[:, 0], octagon[:, 1])[:, None]
+    octagon = np.hstack([octagon / norm, u_max * np.cos(np.pi / 8) / norm])
     owner = np.concatenate([owner, np.repeat(np.arange(n), 8)])
-    A = np.concatenate([A, np.tile(octagon, (n, 1))])
-    b = np.concatenate([b, np.full(8 * n, u_max * np.cos(np.pi / 8))])
-    order = np.argsort(owner, kind="stable")
+    rows = np.concatenate([np.column_stack([A, b]), np.tile(octagon, (n, 1))])
+    rows = rows[np.argsort(owner, kind="stable")]
     offsets = np.zeros(n + 1, dtype=np.int64)
     offsets[1:] = np.cumsum(np.bincount(owner, minlength=n))
-    box = np.array([u_max, u_max])
-    rows = (A[order], b[order], offsets, -box, box)
-    out = exact.solve_csr(pref, *rows)[0]
-    speed = np.sqrt((pref * pref).sum(axis=-1))
-    still = np.sqrt((out * out).sum(axis=-1)) < rorca.SIDESTEP * speed
-    right = np.stack([pref[:, 1], -pref[:, 0]], axis=-1)
-    out = np.where(still[:, None], exact.solve_csr(right, *rows)[0], out)
+    out = np.empty((n, 2))
+    for i in range(n):
+        own = np.ascontiguousarray(rows[offsets[i] : offsets[i + 1]])
+        exact.solve_point(*pref[i], own, len(own), -u_max, -u_max, u_max, u_max, out[i])
+        if np.sqrt(out[i] @ out[i]) < rorca.SIDESTEP * np.sqrt(pref[i] @ pref[i]):  # sidestep
+            exact.solve_point(pref[i, 1], -pref[i, 0], own, len(own), -u_max, -u_max, u_max,
+                              u_max, out[i])  # fmt: skip
     return clip_norm(out, u_max)
 
 
@@ -342,7 +345,7 @@ def reference_velocities(x, v, pref, radii, theta, u_max, dt, tau, parked, goals
 def test_the_compiled_stage_equals_r_orca_assembled_from_its_parts(n, seed, K, lattice):
     """The one compiled pass (neighbour lists, nearest K, half-planes, exact QP, sidestep) gives
     bit for bit the velocities of the pair-by-pair assembly, in dense crowds (all pairs, N <= 64)
-    and sparse ones (a KD-tree), with agents parked, held and overlapping; on a lattice many
+    and sparse ones (the grid), with agents parked, held and overlapping; on a lattice many
     neighbours tie in distance, and the nearest K break ties as the lexsort did."""
     rng = np.random.default_rng(seed)
     side = np.sqrt(n) * 1.2

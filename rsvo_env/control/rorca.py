@@ -49,8 +49,8 @@ _OCTAGON = np.stack(
 @njit(cache=True, inline="always")
 def _plane(x, v, radii, me, other, vo, avoid, slack, inv_tau, dt):
     """Agent ``me``'s R-ORCA half-plane against ``other`` (read at velocity ``vo``) as a row
-    ``(ax, ay, b)`` of ``A . v <= b``: ``avoid`` its share of the avoidance, ``slack`` of the
-    slack (eq. ``rorca``)."""
+    ``(ax, ay, b)`` of ``A . v <= b``, ``(ax, ay)`` a unit normal: ``avoid`` its share of the
+    avoidance, ``slack`` of the slack (eq. ``rorca``)."""
     rx, ry = x[other, 0] - x[me, 0], x[other, 1] - x[me, 1]
     wx0, wy0 = v[me, 0] - vo[0], v[me, 1] - vo[1]
     R = radii[me] + radii[other]
@@ -141,56 +141,61 @@ def _neighbor_lists(I, J, x, cut, M):
 @njit(cache=True, inline="always")
 def _capped(a, x, g, pref, r, offsets, other, tau, held, out):
     """Agent a's preferred velocity with the arrival cap (:func:`arrival_capped`) into out[a]."""
-    gap = np.inf
-    for k in range(offsets[a], offsets[a + 1]):
-        j = other[k]
-        dx, dy = g[a, 0] - x[j, 0], g[a, 1] - x[j, 1]
-        gap = min(gap, np.sqrt(dx * dx + dy * dy) - r[a] - r[j])
     px, py = pref[a, 0], pref[a, 1]
     speed = np.sqrt(px * px + py * py)
     gx, gy = g[a, 0] - x[a, 0], g[a, 1] - x[a, 1]
     dist = np.sqrt(gx * gx + gy * gy)
     scale = 1.0
-    if speed * tau - dist > gap and speed * tau > ARRIVE * dist and held[a]:
-        scale = ARRIVE * dist / (tau * speed)
+    if held[a] and speed * tau > ARRIVE * dist:  # only then can the gap to a neighbour tell
+        gap = np.inf
+        for k in range(offsets[a], offsets[a + 1]):
+            j = other[k]
+            dx, dy = g[a, 0] - x[j, 0], g[a, 1] - x[j, 1]
+            gap = min(gap, np.sqrt(dx * dx + dy * dy) - r[a] - r[j])
+        if speed * tau - dist > gap:
+            scale = ARRIVE * dist / (tau * speed)
     out[a, 0], out[a, 1] = px * scale, py * scale
 
 
 @njit(cache=True, inline="always")
-def _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out):
+def _agent(a, x, v, pref, r, lists, w, tied, park, settings, octagon, rows, near, out):
     """Agent a's R-ORCA velocity (before the speed clip) into out[a]: the half-planes of its
-    ``K`` nearest candidates (ties: the earlier in its list), the octagon, the exact QP, and
-    the sidestep where the half-planes hold it still. ``lists``: :func:`_neighbor_lists`;
-    ``settings``: (K, u_max, tau, dt)."""
+    ``K`` nearest candidates (ties: the earlier in its list), the ``octagon`` (its 8 rows,
+    normalised), the exact QP, and the sidestep where the half-planes hold it still.
+    ``lists``: :func:`_neighbor_lists`; ``settings``: (K, u_max, tau, dt); ``near``: scratch
+    (widest list, 3)."""
     offsets, other, pair, side = lists
     K, u_max, tau, dt = settings
     inv_tau = 1.0 / tau
     start, stop = offsets[a], offsets[a + 1]
     count = stop - start
     keep = count if K < 0 else min(K, count)
-    # the K nearest, by an insertion sort into near[:keep] (K is ORCA's 10)
-    filled = 0
-    for k in range(start, stop):
-        j = other[k]
-        dx, dy = x[a, 0] - x[j, 0], x[a, 1] - x[j, 1]
-        d2 = dx * dx + dy * dy
-        if filled == keep and d2 >= near[keep - 1, 0]:
-            continue
-        pos = min(filled, keep - 1)
-        while pos > 0 and near[pos - 1, 0] > d2:
-            near[pos] = near[pos - 1]
-            pos -= 1
-        near[pos, 0], near[pos, 1] = d2, k
-        filled = min(filled + 1, keep)
-    bound = near[keep - 1, 0] if keep > 0 else -1.0
-    last = near[keep - 1, 1] if keep > 0 else -1.0
+    bound, last = np.inf, stop
+    if keep < count:
+        # the K nearest, by an insertion sort into near[:keep] (K is ORCA's 10); each squared
+        # distance kept in near[:, 2] for the pass below
+        filled = 0
+        for k in range(start, stop):
+            j = other[k]
+            dx, dy = x[a, 0] - x[j, 0], x[a, 1] - x[j, 1]
+            d2 = dx * dx + dy * dy
+            near[k - start, 2] = d2
+            if filled == keep and d2 >= near[keep - 1, 0]:
+                continue
+            pos = min(filled, keep - 1)
+            while pos > 0 and near[pos - 1, 0] > d2:
+                near[pos, 0], near[pos, 1] = near[pos - 1, 0], near[pos - 1, 1]
+                pos -= 1
+            near[pos, 0], near[pos, 1] = d2, k
+            filled = min(filled + 1, keep)
+        bound, last = near[keep - 1, 0], near[keep - 1, 1]
     nrows = 0
     for k in range(start, stop):
+        if keep < count:
+            d2 = near[k - start, 2]
+            if d2 > bound or (d2 == bound and k > last):
+                continue
         j = other[k]
-        dx, dy = x[a, 0] - x[j, 0], x[a, 1] - x[j, 1]
-        d2 = dx * dx + dy * dy
-        if d2 > bound or (d2 == bound and k > last):
-            continue
         p = pair[k]
         if tied:
             # an agent parked on its goal takes all of the avoidance from one en route, reading
@@ -207,29 +212,48 @@ def _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out):
             s0, s1 = 1.0 - w[p, 0], 1.0 - w[p, 1]
         avoid, slack = (s0, s1) if side[k] == 0 else (s1, s0)
         vo = pref[j] if park[a] and not park[j] else v[j]
-        ax, ay, b = _plane(x, v, r, a, j, vo, avoid, slack, inv_tau, dt)
-        exact.set_row(rows, nrows, ax, ay, b)
+        # a unit normal by construction (a leg's or the cutoff circle's direction): stored as
+        # it is, where normalising it again would cost as much as the QP
+        rows[nrows, 0], rows[nrows, 1], rows[nrows, 2] = _plane(
+            x, v, r, a, j, vo, avoid, slack, inv_tau, dt
+        )
         nrows += 1
-    edge = u_max * np.cos(np.pi / 8)
-    for q in range(8):
-        exact.set_row(rows, nrows, _OCTAGON[q, 0], _OCTAGON[q, 1], edge)
-        nrows += 1
+    rows[nrows : nrows + 8] = octagon
+    nrows += 8
     px, py = pref[a, 0], pref[a, 1]
     res = out[a]
-    exact.solve_rows(px, py, rows, nrows, -u_max, -u_max, u_max, u_max, res)
+    exact.solve_point(px, py, rows, nrows, -u_max, -u_max, u_max, u_max, res)
     # an agent the half-planes hold still while it wants to move (a jam that is symmetric, as
     # in a ring around a common goal) sidesteps: the velocity closest to its preferred one
     # turned to its right, which the half-planes of touching neighbours let it take
     if np.sqrt(res[0] * res[0] + res[1] * res[1]) < SIDESTEP * np.sqrt(px * px + py * py):
-        exact.solve_rows(py, -px, rows, nrows, -u_max, -u_max, u_max, u_max, res)
+        exact.solve_point(py, -px, rows, nrows, -u_max, -u_max, u_max, u_max, res)
 
 
 @njit(cache=True)
-def _widest_list(offsets, K):
+def _octagon(u_max):
+    """The speed limit's 8 rows, normalised as :func:`exact.set_row` stores them."""
+    rows = np.empty((8, 3))
+    edge = u_max * np.cos(np.pi / 8)
+    for q in range(8):
+        exact.set_row(rows, q, _OCTAGON[q, 0], _OCTAGON[q, 1], edge)
+    return rows
+
+
+@njit(cache=True)
+def _widest_list(offsets):
     widest = 0
     for a in range(offsets.shape[0] - 1):
         widest = max(widest, offsets[a + 1] - offsets[a])
-    return widest if K < 0 else min(widest, K)
+    return widest
+
+
+@njit(cache=True)
+def _scratch(width, K):
+    """An agent's row space (its K nearest and the octagon) and the insertion's (every
+    candidate), for lists of at most ``width``."""
+    kept = width if K < 0 else min(width, K)
+    return np.empty((kept + 8, 3)), np.empty((max(width, 1), 3))
 
 
 @njit(cache=True)
@@ -242,10 +266,11 @@ def _stage_serial(motion, lists, w, tied, park, held, settings, pref, out):
     M = x.shape[0]
     for a in range(M):
         _capped(a, x, g, pref0, r, offsets, other, tau, held, pref)
-    width = _widest_list(offsets, K)
-    rows, near = np.empty((width + 8, 3)), np.empty((max(width, 1), 2))
+    width = _widest_list(offsets)
+    octagon = _octagon(settings[1])
+    rows, near = _scratch(width, K)
     for a in range(M):
-        _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out)
+        _agent(a, x, v, pref, r, lists, w, tied, park, settings, octagon, rows, near, out)
 
 
 @njit(cache=True, parallel=True)
@@ -260,11 +285,12 @@ def _stage_parallel(motion, lists, w, tied, park, held, settings, pref, out):
     for c in prange(blocks):
         for a in range(c * chunk, min(M, (c + 1) * chunk)):
             _capped(a, x, g, pref0, r, offsets, other, tau, held, pref)
-    width = _widest_list(offsets, K)
+    width = _widest_list(offsets)
+    octagon = _octagon(settings[1])
     for c in prange(blocks):
-        rows, near = np.empty((width + 8, 3)), np.empty((max(width, 1), 2))
+        rows, near = _scratch(width, K)
         for a in range(c * chunk, min(M, (c + 1) * chunk)):
-            _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out)
+            _agent(a, x, v, pref, r, lists, w, tied, park, settings, octagon, rows, near, out)
 
 
 def arrival_capped(

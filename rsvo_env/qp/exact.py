@@ -139,6 +139,21 @@ def _solve_one(nom, A, b, mask, lo, hi, rows, out):
 def solve_rows(nx, ny, rows, nrows, lo0, lo1, hi0, hi1, out):
     """The QP of normalised ``rows[:nrows]``; writes the action to ``out``. Returns
     (feasible, active, max_violation)."""
+    ok, violation = solve_point(nx, ny, rows, nrows, lo0, lo1, hi0, hi1, out)
+    scale = max(max(abs(lo0), abs(hi0)), max(abs(lo1), abs(hi1)))
+    ux, uy = out[0], out[1]
+    active = 0
+    for k in range(nrows):
+        if abs(rows[k, 0] * ux + rows[k, 1] * uy - rows[k, 2]) <= _ACTIVE_TOL * (
+            scale + abs(rows[k, 2])
+        ):
+            active += 1
+    return ok, active, violation
+
+
+@njit(cache=True)
+def solve_point(nx, ny, rows, nrows, lo0, lo1, hi0, hi1, out):
+    """:func:`solve_rows` without counting the active rows: (feasible, max_violation)."""
     scale = max(max(abs(lo0), abs(hi0)), max(abs(lo1), abs(hi1)))
     ux, uy, ok = _project(nx, ny, rows, nrows, 0.0, lo0, lo1, hi0, hi1, scale)
     violation = 0.0
@@ -160,15 +175,9 @@ def solve_rows(nx, ny, rows, nrows, lo0, lo1, hi0, hi1, out):
     # The input bounds are physical limits: never exceed them, not even by a rounding.
     ux = min(max(ux, lo0), hi0)
     uy = min(max(uy, lo1), hi1)
-    active = 0
-    for k in range(nrows):
-        if abs(rows[k, 0] * ux + rows[k, 1] * uy - rows[k, 2]) <= _ACTIVE_TOL * (
-            scale + abs(rows[k, 2])
-        ):
-            active += 1
     out[0] = ux
     out[1] = uy
-    return ok, active, violation
+    return ok, violation
 
 
 @njit(cache=True)
