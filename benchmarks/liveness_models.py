@@ -19,12 +19,12 @@ import time
 from pathlib import Path
 
 import numpy as np
-from liveness_report import replace_section  # a sibling module: benchmarks/ is the path
+from liveness_report import MODELS_HEADING, replace_section  # a sibling: benchmarks/ is the path
 
 from rsvo_env.envs.vector import BatchedEnv
 
 RESULTS = Path(__file__).resolve().parent / "results"
-HEADING = "## Every model"
+HEADING = MODELS_HEADING
 MODELS = ("single_integrator", "double_integrator", "unicycle")
 CROWD = {"dt": 0.05, "gamma": 20.0, "theta_range": (1.0, 10.0)}  # the crowd table's setting
 

@@ -13,6 +13,8 @@ SYMMETRIC_HEADING = "## Crowd of 1,000, symmetric weighting"
 HELD_OUT_HEADING = "## Crowd of 1,000, held-out seeds"
 HELD_OUT_SEEDS = range(10, 20)
 LEARNED_HEADING = "## The learned residual at scale"
+# benchmarks/liveness_models.py's section
+MODELS_HEADING = "## Every model"
 
 
 PAPER_ROW = ", the paper's controller"
@@ -188,11 +190,12 @@ def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
             f"- {name}: arrived {100 * r['arrived'][-1]:.1f} %, makespan {r['makespan'] or '-'},"
             f" closest pair {r['closest']:.4f} m."
         )
-    # the sections rerun alone (--big, --symmetric-only, --held-out, --learned) survive a full
-    # run
+    # the sections rerun alone (--big, --symmetric-only, --held-out, --learned) and
+    # liveness_models.py's survive a full run
     old = path.read_text() if path.exists() else ""
     path.write_text("\n".join(lines) + "\n")
-    for heading in (BIG_HEADING, SYMMETRIC_HEADING, HELD_OUT_HEADING, LEARNED_HEADING):
+    for heading in (BIG_HEADING, SYMMETRIC_HEADING, HELD_OUT_HEADING, LEARNED_HEADING,
+                    MODELS_HEADING):  # fmt: skip
         if heading in old:
             start, end = _span(old, heading)
             body = old[start:end].rstrip("\n").split("\n")

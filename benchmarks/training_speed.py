@@ -8,7 +8,8 @@ config's ``n_steps`` x ``num_envs`` x 6 agent-steps an update):
 * single: ``SB3VecEnv`` over one filtered ``RSVOParallelEnv`` with ``ResidualAction`` (PettingZoo
   dicts, 6 slots), ``n_steps`` times ``num_envs``.
 
-For each: agent-steps per second with the PPO updates included, and the share of wall time in
+Then the crowd config with R-ORCA under the residual against move-to-goal under it. For each:
+agent-steps per second with the PPO updates included, and the share of wall time in
 the env step (filter included), in the filter stage alone, in the policy's forward passes
 during rollouts (the rest of the rollout) and in the PPO update. One torch thread. Each figure is
 the best of ``--repeats`` alternating runs. Writes ``benchmarks/results/training_speed.md``.
@@ -69,8 +70,14 @@ def hyper_note(cfg: dict[str, Any]) -> str:
     return f"{arch} {act} layers, {ppo['n_epochs']} epochs, minibatches of {ppo['batch_size']}"
 
 
-def run(path: str, updates: int) -> dict[str, float]:
-    cfg = configs.resolve(configs.load("circular_swap"))
+def run(path: str, updates: int, scenario: str = "circular_swap", nominal: str | None = None
+        ) -> dict[str, float]:  # fmt: skip
+    """One PPO run of ``updates`` updates on ``path`` ("batched" or "single"), the config of
+    ``scenario`` with ``env.nominal`` set to ``nominal`` where given: rates and time shares."""
+    cfg = configs.load(scenario)
+    if nominal is not None:
+        configs.set_value(cfg, f"env.nominal={nominal}")
+    cfg = configs.resolve(cfg)
     rollout = rollout_size(cfg)
     if path == "batched":
         venv = SB3VecEnv(configs.make_env(cfg, num_envs=cfg["num_envs"]))
@@ -106,6 +113,38 @@ def sampling_ratio(best: dict[str, dict[str, float]]) -> float:
     """Batched / single agent-steps per second of the rollouts alone (update time removed)."""
     b, s = best["batched"], best["single"]
     return (b["rate"] / (1.0 - b["update"])) / (s["rate"] / (1.0 - s["update"]))
+
+
+def nominal_section(updates: int, repeats: int) -> list[str]:
+    """The crowd config trained with R-ORCA under the residual against move-to-goal under it,
+    alternating runs, the best of each."""
+    best: dict[str, dict[str, float]] = {}
+    for _ in range(repeats):
+        for nominal in ("move_to_goal", "rorca"):
+            r = run("batched", updates, "crowd", nominal)
+            if nominal not in best or r["rate"] > best[nominal]["rate"]:
+                best[nominal] = r
+    cfg = configs.resolve(configs.load("crowd"))
+    lines = [
+        "## The residual's base: R-ORCA against move-to-goal",
+        "",
+        f"The crowd config ({cfg['env']['num_agents']} agents, {cfg['num_envs']} envs, dt "
+        f"{cfg['env']['dt']}, PPO {hyper_note(cfg)}, {rollout_size(cfg)} agent-steps an update) "
+        "through `BatchedEnv`, with `env.nominal=move_to_goal` (the config's) and with "
+        "`env.nominal=rorca`, alternating, best of each.",
+        "",
+        "| env.nominal | agent-steps/s (updates included) | env step | of which filter | policy "
+        "forward | PPO update |",
+        "|---|---|---|---|---|---|",
+    ]
+    for nominal in ("move_to_goal", "rorca"):
+        r = best[nominal]
+        lines.append(
+            f"| {nominal} | {r['rate']:.0f} | {r['env']:.0%} | {r['filter']:.0%} | "
+            f"{r['policy']:.0%} | {r['update']:.0%} |"
+        )
+    ratio = best["rorca"]["rate"] / best["move_to_goal"]["rate"]
+    return [*lines, "", f"R-ORCA / move-to-goal: **{ratio:.2f}x** the agent-steps per second.", ""]
 
 
 def main() -> int:
@@ -153,6 +192,7 @@ def main() -> int:
         "env, however fast, could make the batched path more than 1 / (the single path's "
         f"update share) = {ceiling:.1f}x faster than the single one.",
         "",
+        *nominal_section(args.updates, args.repeats),
     ]
     out = ROOT / "benchmarks" / "results" / "training_speed.md"
     out.write_text("\n".join(lines))
