@@ -21,12 +21,14 @@ from pathlib import Path
 import numpy as np
 from liveness_report import MODELS_HEADING, replace_section  # a sibling: benchmarks/ is the path
 
+from rsvo_env.dynamics.unicycle import Unicycle
 from rsvo_env.envs.vector import BatchedEnv
 
 RESULTS = Path(__file__).resolve().parent / "results"
 HEADING = MODELS_HEADING
 MODELS = ("single_integrator", "double_integrator", "unicycle")
 CROWD = {"dt": 0.05, "gamma": 20.0, "theta_range": (1.0, 10.0)}  # the crowd table's setting
+L = Unicycle.scenario_defaults["lookahead"]
 
 
 def run(scene: str, model: str, n: int, seeds: range, cap: int, **kw) -> dict:
@@ -98,9 +100,9 @@ def crowd_rows(n: int, seeds: range, cap: int, **kw) -> list[dict]:
         rows.append(r)
         print("crowd", n, model, r["arrived"].mean(), r["makespan"].tolist(), flush=True)
     # the unicycle's layout is 4 look-aheads wider (spacing 1.2 R + 4 l, side 2.5 sqrt(N)
-    # (R + 2 l)): the single integrator on those very starts and goals, for its ratio
-    base = run("crowd", "single_integrator", n, seeds, cap, spacing_factor=2.0,
-               side_factor=3.5, **kw)  # fmt: skip
+    # (R + 2 l), R = 1): the single integrator on those very starts and goals, for its ratio
+    base = run("crowd", "single_integrator", n, seeds, cap, spacing_factor=1.2 + 4.0 * L,
+               side_factor=2.5 * (1.0 + 2.0 * L), **kw)  # fmt: skip
     base["label"] = "single integrator, the unicycle's layout"
     rows.append(base)
     return rows
@@ -136,7 +138,7 @@ def main(argv: list[str] | None = None) -> int:
         " k_v = 8, a_max = 2, the speed capped at `sqrt(a_max d)` short of the goal, behind the"
         " stopping-segment barrier, the default), on the look-ahead point"
         " for the unicycle (bodies"
-        " enlarged by the look-ahead l = 0.2 m, turning in place where the velocity lies"
+        f" enlarged by the look-ahead l = {L} m, turning in place where the velocity lies"
         " behind). Seeds 0 to 9, theta 1..10. The unicycle's ratio is against the single"
         " integrator on the unicycle's own starts and goals (its layout is 4 look-aheads wider);"
         " its closest pair is of axles (the filter holds the look-ahead points R + 2 l apart).",

@@ -34,6 +34,7 @@ import numpy as np
 
 from rsvo_env.control.nominal import move_to_goal
 from rsvo_env.dynamics import double_integrator_step
+from rsvo_env.dynamics.unicycle import Unicycle as UnicycleModel
 from rsvo_env.dynamics.unicycle import unicycle_step
 from rsvo_env.filter import dense
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
@@ -179,7 +180,9 @@ class Unicycle:
     ``(R + 4 l) / R`` so the look-ahead points start apart; nominal: full speed toward the
     goal, turning at ``K_W`` times the heading error."""
 
-    LOOKAHEAD, W_MAX, K_W = 0.2, 3.0, 2.0
+    # the scenarios' own look-ahead and turn-rate bound
+    LOOKAHEAD, W_MAX = (UnicycleModel.scenario_defaults[k] for k in ("lookahead", "w_max"))
+    K_W = 2.0
 
     def __init__(self, n: int, spread: bool, gamma: float | None = None) -> None:
         self.sc, p, goals = crowd_start(n)

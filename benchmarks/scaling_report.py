@@ -8,6 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
+from rsvo_env.dynamics.unicycle import Unicycle
+
+UNI = Unicycle.scenario_defaults
+
 
 def plot(rows: list[dict], di: list[dict], path: Path) -> None:
     """µs per agent-step against N, log-log: ours (theta equal, 1..10), ORCA, DI."""
@@ -61,7 +65,8 @@ def di_section(di: list, DT: float, DoubleIntegrator) -> list[str]:
         " the box); the stopping-segment barrier (the default, `docs/double_integrator.md`),"
         " the backup barrier (the stopping disk) and the braking barrier with the capability"
         " split. Nominal: a = 2 (v_des - v) with v_des the"
-        " move-to-goal command. The unicycles (look-ahead l = 0.2 m, w_max = 3 rad/s, their"
+        f" move-to-goal command. The unicycles (look-ahead l = {UNI['lookahead']} m, w_max ="
+        f" {UNI['w_max']} rad/s, the scenarios' defaults, their"
         " crowd spread so the look-ahead points start apart) run the single integrator's rows"
         " on their look-ahead points, at the single integrator's gamma and at the double"
         " integrator's; nominal: full speed toward the goal, turning at twice the heading"

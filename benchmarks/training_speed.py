@@ -115,15 +115,36 @@ def sampling_ratio(best: dict[str, dict[str, float]]) -> float:
     return (b["rate"] / (1.0 - b["update"])) / (s["rate"] / (1.0 - s["update"]))
 
 
+def best_of(repeats: int, runs: dict[str, Any]) -> dict[str, dict[str, float]]:
+    """Each of ``runs`` (name: a callable returning :func:`run`'s dict), alternating,
+    ``repeats`` times: the fastest of each."""
+    best: dict[str, dict[str, float]] = {}
+    for _ in range(repeats):
+        for name, go in runs.items():
+            r = go()
+            if name not in best or r["rate"] > best[name]["rate"]:
+                best[name] = r
+    return best
+
+
+def table(first: str, rows: dict[str, dict[str, float]]) -> list[str]:
+    """The rates and time shares of ``rows`` (label: :func:`run`'s dict)."""
+    return [
+        f"| {first} | agent-steps/s (updates included) | env step | of which filter | policy "
+        "forward | PPO update |",
+        "|---|---|---|---|---|---|",
+        *(f"| {label} | {r['rate']:.0f} | {r['env']:.0%} | {r['filter']:.0%} | "
+          f"{r['policy']:.0%} | {r['update']:.0%} |" for label, r in rows.items()),  # fmt: skip
+    ]
+
+
 def nominal_section(updates: int, repeats: int) -> list[str]:
     """The crowd config trained with R-ORCA under the residual against move-to-goal under it,
     alternating runs, the best of each."""
-    best: dict[str, dict[str, float]] = {}
-    for _ in range(repeats):
-        for nominal in ("move_to_goal", "rorca"):
-            r = run("batched", updates, "crowd", nominal)
-            if nominal not in best or r["rate"] > best[nominal]["rate"]:
-                best[nominal] = r
+    best = best_of(repeats, {
+        nominal: (lambda nominal=nominal: run("batched", updates, "crowd", nominal))
+        for nominal in ("move_to_goal", "rorca")
+    })  # fmt: skip
     cfg = configs.resolve(configs.load("crowd"))
     lines = [
         "## The residual's base: R-ORCA against move-to-goal",
@@ -133,16 +154,8 @@ def nominal_section(updates: int, repeats: int) -> list[str]:
         "through `BatchedEnv`, with `env.nominal=move_to_goal` (the config's) and with "
         "`env.nominal=rorca`, alternating, best of each.",
         "",
-        "| env.nominal | agent-steps/s (updates included) | env step | of which filter | policy "
-        "forward | PPO update |",
-        "|---|---|---|---|---|---|",
+        *table("env.nominal", best),
     ]
-    for nominal in ("move_to_goal", "rorca"):
-        r = best[nominal]
-        lines.append(
-            f"| {nominal} | {r['rate']:.0f} | {r['env']:.0%} | {r['filter']:.0%} | "
-            f"{r['policy']:.0%} | {r['update']:.0%} |"
-        )
     ratio = best["rorca"]["rate"] / best["move_to_goal"]["rate"]
     return [*lines, "", f"R-ORCA / move-to-goal: **{ratio:.2f}x** the agent-steps per second.", ""]
 
@@ -153,12 +166,9 @@ def main() -> int:
     p.add_argument("--repeats", type=int, default=3)
     args = p.parse_args()
     torch.set_num_threads(1)
-    best: dict[str, dict[str, float]] = {}
-    for _ in range(args.repeats):
-        for path in ("batched", "single"):
-            r = run(path, args.updates)
-            if path not in best or r["rate"] > best[path]["rate"]:
-                best[path] = r
+    best = best_of(args.repeats, {
+        path: (lambda path=path: run(path, args.updates)) for path in ("batched", "single")
+    })  # fmt: skip
     ratio = best["batched"]["rate"] / best["single"]["rate"]
     cfg = configs.resolve(configs.load("circular_swap"))
     lines = [
@@ -172,17 +182,9 @@ def main() -> int:
         f"({hyper_note(cfg)}), {rollout_size(cfg)} agent-steps an update; best of the "
         "alternating runs. Shares are of wall time; the filter is part of the env step.",
         "",
-        "| path | agent-steps/s (updates included) | env step | of which filter | policy "
-        "forward | PPO update |",
-        "|---|---|---|---|---|---|",
+        *table("path", {f"BatchedEnv, {cfg['num_envs']} envs": best["batched"],
+                        "one ParallelEnv": best["single"]}),  # fmt: skip
     ]
-    batched_label = f"BatchedEnv, {cfg['num_envs']} envs"
-    for path, label in (("batched", batched_label), ("single", "one ParallelEnv")):
-        r = best[path]
-        lines.append(
-            f"| {label} | {r['rate']:.0f} | {r['env']:.0%} | {r['filter']:.0%} | "
-            f"{r['policy']:.0%} | {r['update']:.0%} |"
-        )
     ceiling = 1.0 / best["single"]["update"]
     lines += [
         "",

@@ -53,8 +53,8 @@ def test_pettingzoos_checker_passes_every_model_in_the_doorway(model):
 
 
 def test_the_models_parameters_belong_to_their_models():
-    sc = make_scenario("crowd", dynamics="unicycle", lookahead=0.1, w_max=4.0)
-    assert (sc.params["lookahead"], sc.params["w_max"]) == (0.1, 4.0)
+    sc = make_scenario("crowd", dynamics="unicycle", lookahead=0.15, w_max=4.0)
+    assert (sc.params["lookahead"], sc.params["w_max"]) == (0.15, 4.0)
     assert make_scenario("doorway", dynamics="double_integrator", a_max=3.0).u_max == 3.0
     with pytest.raises(TypeError, match="crowd.a_max is the double_integrator's parameter"):
         make_scenario("crowd", a_max=2.0)
@@ -160,7 +160,8 @@ def test_the_steered_velocity_is_the_look_ahead_points_own(seed):
         _, _, _, _, info = env.step(env.nominal_actions())
         u = info["u_safe"]
         e = heading_vectors(hd)
-        c = u[..., :1] * e + 0.2 * u[..., 1:] * np.stack([-e[..., 1], e[..., 0]], -1)
+        l = env.sim.scenario.params["lookahead"]
+        c = u[..., :1] * e + l * u[..., 1:] * np.stack([-e[..., 1], e[..., 0]], -1)
         assert np.allclose(s.steered_velocities, c, atol=1e-12 * 2.0)
 
 
