@@ -33,8 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from rsvo_env.control.nominal import move_to_goal
-from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.dynamics.unicycle import Unicycle as UnicycleModel
+from rsvo_env.dynamics import MODELS, double_integrator_step
 from rsvo_env.dynamics.unicycle import unicycle_step
 from rsvo_env.filter import dense
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
@@ -180,8 +179,7 @@ class Unicycle:
     ``(R + 4 l) / R`` so the look-ahead points start apart; nominal: full speed toward the
     goal, turning at ``K_W`` times the heading error."""
 
-    # the scenarios' own look-ahead and turn-rate bound
-    LOOKAHEAD, W_MAX = (UnicycleModel.scenario_defaults[k] for k in ("lookahead", "w_max"))
+    LOOKAHEAD, W_MAX = (MODELS["unicycle"].scenario_defaults[k] for k in ("lookahead", "w_max"))
     K_W = 2.0
 
     def __init__(self, n: int, spread: bool, gamma: float | None = None) -> None:
