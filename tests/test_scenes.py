@@ -174,3 +174,30 @@ def test_a_bad_speed_limit_per_agent_names_the_agent():
         make_scenario("custom", **custom(u_max=[1.0, 1.0, -1.0, 1.0]))
     with pytest.raises(ValueError, match=r"custom.u_max has shape \(3,\), expected \(4,\)"):
         make_scenario("custom", **custom(u_max=[1.0, 1.0, 1.0]))
+
+
+@pytest.mark.parametrize("gap", [3.0, 4.0, 6.0])
+def test_the_doorways_script_never_heads_into_the_wall(gap):
+    """Before crossing, every agent on its own side heads for a point whose straight line meets
+    the wall's face, if at all, inside the band where a body passes (|y| <= gap / 2 - R / 2):
+    a grid of positions on both sides, above, within and below the gap (the band was once
+    taken about the lane, and agents above it headed into the wall)."""
+    # no speed limit to speak of: move-to-goal's velocity is k (target - x), the target exact
+    sc = make_scenario("doorway", num_agents=2, gap=gap, nominal="move_to_goal", u_max=1e6)
+    p = sc.params
+    face = 0.5 * p["thickness"] + 0.5 * p["safety_radius"]
+    band = 0.5 * gap - 0.5 * p["safety_radius"]
+    xs, ys = np.meshgrid(np.linspace(face + 0.05, 8.0, 25), np.linspace(-6.0, 6.0, 49))
+    mine = np.stack([xs.ravel(), ys.ravel()], -1)
+    for side in (-1.0, 1.0):  # agents right of the wall head left, and the mirror
+        x = mine * [-side, 1.0]
+        goals = np.broadcast_to([side * 10.0, 0.0], x.shape)
+        state = type("S", (), {"positions": x[None], "goals": goals[None],
+                               "rh_active": np.zeros((1, len(x)), bool)})()  # fmt: skip
+        target = x + sc.nominal(state, right_hand=False)[0] / p["k"]
+        # the segment x -> target crosses the own face (x = -side face) where it passes it
+        crosses = np.sign(target[:, 0] + side * face) != np.sign(x[:, 0] + side * face)
+        s_face = (-side * face - x[:, 0]) / (target[:, 0] - x[:, 0])
+        y_face = x[:, 1] + s_face * (target[:, 1] - x[:, 1])
+        bad = crosses & (np.abs(y_face) > band + 1e-9)
+        assert not bad.any(), x[bad]

@@ -114,8 +114,9 @@ class Scene(Scenario):
 
 class Doorway(Scenario):
     """Two groups on either side of a wall cross through its gap to the other side (the
-    bottleneck of crowd simulators). The scripted controller comes level with its lane of the
-    gap on its own side, heads through the gap, then for the goal."""
+    bottleneck of crowd simulators). The scripted controller heads for its lane of the gap (its
+    own half, right-hand traffic), then for the goal; an agent outside the band where a body
+    passes through the gap first comes level with its lane on its own side."""
 
     name = "doorway"
     models = dynamics.NAMES
@@ -175,11 +176,12 @@ class Doorway(Scenario):
         # right-hand traffic: each direction keeps to its own half of the gap, just past it
         lane = -side * 0.25 * p["gap"]
         mouth = np.stack([side * p["safety_radius"], lane], -1)
-        # an agent not yet level with its lane first comes level with it on its own side: the
-        # straight line to the mouth would press it into the wall, where a double integrator's
-        # stopping segment pins it (docs/liveness.md)
+        # an agent not yet level with the gap (its centre within the band where a body passes)
+        # first comes level with its lane on its own side: the straight line to the mouth would
+        # press it into the wall, where a double integrator's stopping segment pins it
+        # (docs/liveness.md); from within the band the line to the mouth stays in it
         R = p["safety_radius"]
-        level = np.abs(x[..., 1] - lane) <= 0.5 * p["gap"] - 0.5 * R
+        level = np.abs(x[..., 1]) <= 0.5 * p["gap"] - 0.5 * R
         near = np.stack([-side * 1.5 * R, lane], -1)
         mouth = np.where(level[..., None], mouth, near)
         target = np.where(crossed[..., None], goals, mouth)
