@@ -112,30 +112,31 @@ def _half_planes(x, v, radii, I, J, share, tau, dt, parked, seen):
 def _neighbor_lists(I, J, x, cut, M):
     """Each agent's candidate neighbours (CSR ``offsets`` (M + 1,), ``other``, ``pair``,
     ``side``) among the pairs (I, J) within ``cut`` of each other: the pairs where it is first,
-    in pair order, then those where it is second, the order in which an agent's rows stack."""
+    in pair order, then those where it is second, the order in which an agent's rows stack.
+    Branch-free: whether a pair is near is a coin toss in a dense crowd, and a mispredicted
+    branch a pair cost more than the rest (a pair not near writes to a spare last slot)."""
     P = I.shape[0]
-    near = np.empty(P, dtype=np.bool_)
+    near = np.empty(P, dtype=np.int64)
     offsets = np.zeros(M + 1, dtype=np.int64)
     for p in range(P):
         dx, dy = x[I[p], 0] - x[J[p], 0], x[I[p], 1] - x[J[p], 1]
         near[p] = np.sqrt(dx * dx + dy * dy) <= cut
-        if near[p]:
-            offsets[I[p] + 1] += 1
-            offsets[J[p] + 1] += 1
+        offsets[I[p] + 1] += near[p]
+        offsets[J[p] + 1] += near[p]
     for a in range(M):
         offsets[a + 1] += offsets[a]
+    total = offsets[M]
     fill = offsets[:-1].copy()
-    other = np.empty(offsets[M], dtype=np.int64)
-    pair = np.empty(offsets[M], dtype=np.int64)
-    side = np.empty(offsets[M], dtype=np.int8)
+    other = np.empty(total + 1, dtype=np.int64)
+    pair = np.empty(total + 1, dtype=np.int64)
+    side = np.empty(total + 1, dtype=np.int8)
     for s in range(2):
         for p in range(P):
-            if near[p]:
-                me, them = (I[p], J[p]) if s == 0 else (J[p], I[p])
-                k = fill[me]
-                other[k], pair[k], side[k] = them, p, s
-                fill[me] += 1
-    return offsets, other, pair, side
+            me, them = (I[p], J[p]) if s == 0 else (J[p], I[p])
+            k = near[p] * fill[me] + (1 - near[p]) * total
+            other[k], pair[k], side[k] = them, p, s
+            fill[me] += near[p]
+    return offsets, other[:total], pair[:total], side[:total]
 
 
 @njit(cache=True, inline="always")
