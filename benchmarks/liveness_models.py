@@ -23,6 +23,7 @@ from liveness_report import MODELS_HEADING, replace_section  # a sibling: benchm
 
 from rsvo_env.dynamics.unicycle import Unicycle
 from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.scenarios import make_scenario
 
 RESULTS = Path(__file__).resolve().parent / "results"
 HEADING = MODELS_HEADING
@@ -99,10 +100,12 @@ def crowd_rows(n: int, seeds: range, cap: int, **kw) -> list[dict]:
         r["label"] = model.replace("_", " ")
         rows.append(r)
         print("crowd", n, model, r["arrived"].mean(), r["makespan"].tolist(), flush=True)
-    # the unicycle's layout is 4 look-aheads wider (spacing 1.2 R + 4 l, side 2.5 sqrt(N)
-    # (R + 2 l), R = 1): the single integrator on those very starts and goals, for its ratio
-    base = run("crowd", "single_integrator", n, seeds, cap, spacing_factor=1.2 + 4.0 * L,
-               side_factor=2.5 * (1.0 + 2.0 * L), **kw)  # fmt: skip
+    # the unicycle's layout is 4 look-aheads wider: the single integrator on those very starts
+    # and goals, for its ratio, the scenario's own spacing and side given as its factors
+    uni = make_scenario("crowd", dynamics="unicycle", num_agents=n)
+    R = uni.params["safety_radius"]
+    base = run("crowd", "single_integrator", n, seeds, cap, spacing_factor=uni.spacing / R,
+               side_factor=uni.side / (np.sqrt(n) * R), **kw)  # fmt: skip
     base["label"] = "single integrator, the unicycle's layout"
     rows.append(base)
     return rows
