@@ -317,6 +317,7 @@ class Scenario:
             rules=rorca.Rules(
                 parked=state.at_goal, goals=state.goals,
                 held=stall.held(state.no_progress, p["dt"], rorca.HOLD_SECONDS),
+                omega=state.omega,
             ),
         )  # fmt: skip
 

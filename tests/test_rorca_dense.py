@@ -1,0 +1,98 @@
+"""R-ORCA's stage for envs of at most DENSE_MAX_AGENTS agents (``rsvo_env/control/rorca_dense.py``):
+each agent reads the others of its env in place and its weights from the env's matrix, and the
+velocities are bit for bit those of the flat-list stage on every pair; the simulation core hands
+it its own matrices, kept current."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rsvo_env.control import rorca, rorca_dense
+from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.geometry import pairs
+from rsvo_env.responsibility.svo import weight_matrix
+
+
+def flat_stage(x, v, pref, radii, theta, modes, K, parked, goals, held, u_max=2.0, dt=0.05):
+    """The flat-list stage on every pair of each env, as rorca_velocities ran it for small envs
+    before the dense stage (the same rules, the same cut)."""
+    E, n = x.shape[:2]
+    M = E * n
+    f = lambda a: np.ascontiguousarray(a, dtype=np.float64).reshape(M, -1)  # noqa: E731
+    xf, vf, pf, gf = f(x), f(v), f(pref), f(goals)
+    r = f(np.broadcast_to(radii, (E, n))).reshape(M)
+    hold, park = held.reshape(M).copy(), parked.reshape(M).copy()
+    park |= rorca.goal_blocked(xf, gf, r, hold)
+    I, J = pairs.all_pairs(n, E)
+    w = np.ascontiguousarray(pairs.weights_of(theta, modes, I, J))
+    lists = rorca._neighbor_lists(I, J, xf, 10.0 * float(r.max()), M)
+    p, out = np.empty((M, 2)), np.empty((M, 2))
+    rorca._stage_serial((xf, vf, gf, pf, r), lists, w, True, park, hold,
+                        (K, u_max, 2.0, dt), p, out)  # fmt: skip
+    return rorca.clip_norm(out, u_max).reshape(E, n, 2)
+
+
+def swapped(theta):
+    """A callable weighting: the matrix of the scores in reverse order's roles."""
+    return weight_matrix(theta[::-1].copy())[::-1, ::-1].copy()
+
+
+@settings(deadline=None, max_examples=40)
+@given(st.integers(2, 64), st.integers(1, 3), st.integers(0, 2**32 - 1),
+       st.sampled_from([-1, 3, 10]), st.booleans())  # fmt: skip
+def test_the_dense_stage_equals_the_flat_stage_bit_for_bit(n, E, seed, K, lattice):
+    """Mixed weightings (asymmetric, symmetric, a callable) across envs, agents parked, held
+    and overlapping; on a lattice distances tie and the nearest K break ties by list order."""
+    rng = np.random.default_rng(seed)
+    side = np.sqrt(n) * 1.3
+    if lattice:
+        x = np.floor(rng.uniform(0, side, (E, n, 2)))
+        x += 1e-3 * np.arange(n)[None, :, None]  # distinct points, many equal distances
+    else:
+        x = rng.uniform(0, side, (E, n, 2))
+    v, pref = rng.uniform(-1, 1, (E, n, 2)), rng.uniform(-2, 2, (E, n, 2))
+    goals = x + rng.uniform(-1.5, 1.5, (E, n, 2))
+    radii = rng.uniform(0.3, 0.6, n)
+    theta = rng.uniform(1, 10, (E, n))
+    modes = ["asymmetric", "symmetric", swapped][:E]
+    parked, held = rng.random((E, n)) < 0.2, rng.random((E, n)) < 0.5
+    expected = flat_stage(x, v, pref, radii, theta, modes, K, parked, goals, held)
+    args = (x, v, pref, radii, theta, modes, 2.0, 0.05, 2.0)
+    K = None if K < 0 else K
+    W = rorca_dense.matrices(theta, modes)
+    computed, given_matrices = (
+        rorca.rorca_velocities(*args, max_neighbors=K, rules=rorca.Rules(parked, goals, held, m))
+        for m in (None, W)
+    )
+    assert np.array_equal(computed, expected)
+    assert np.array_equal(given_matrices, expected)
+
+
+@pytest.mark.parametrize("dynamics", ["single_integrator", "unicycle"])
+def test_the_core_hands_r_orca_its_own_matrices_and_keeps_them_current(dynamics):
+    """``State.omega`` is the core's weight matrix itself, rewritten in place by a reset and by
+    set_weighting; the scripted controller gives the same actions as with matrices computed
+    from the scores."""
+    env = BatchedEnv("crowd", num_envs=3, num_agents=16, dynamics=dynamics,
+                     theta_range=(1.0, 10.0))  # fmt: skip
+    sim = env.sim
+    for round_ in range(3):
+        env.reset(seed=[round_, 10 + round_, 20 + round_])
+        if round_ == 2:
+            env.set_weighting("symmetric")
+        s = sim.state
+        assert s.omega is sim.weights.matrix
+        for e in range(3):
+            assert np.array_equal(s.omega[e], weight_matrix(s.theta[e], s.weighting[e]))
+        for _ in range(40):
+            env.step(env.nominal_actions())
+        sc = sim.scenario
+        preferred = sc.move_to_goal(s, True, sc.speed)
+        with_core = sc.steer(s, preferred)
+        s.omega = None  # the same state, the matrices computed from the scores
+        try:
+            computed = sc.steer(s, preferred)
+        finally:
+            s.omega = sim.weights.matrix
+        assert np.array_equal(with_core, computed)
