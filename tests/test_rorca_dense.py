@@ -69,6 +69,25 @@ def test_the_dense_stage_equals_the_flat_stage_bit_for_bit(n, E, seed, K, lattic
     assert np.array_equal(given_matrices, expected)
 
 
+@settings(deadline=None, max_examples=10)
+@given(st.integers(65, 200), st.integers(1, 2), st.integers(0, 2**32 - 1))
+def test_beyond_64_agents_the_matrices_given_are_gathered_into_the_same_weights(n, E, seed):
+    """The flat-list stage reads ``Rules.omega`` too (its pairs' entries): the velocities are
+    those of the weights computed from the scores, bit for bit."""
+    rng = np.random.default_rng(seed)
+    x = rng.uniform(0, np.sqrt(n) * 1.3, (E, n, 2))
+    v, pref = rng.uniform(-1, 1, (E, n, 2)), rng.uniform(-2, 2, (E, n, 2))
+    goals, theta = x + rng.uniform(-1.5, 1.5, (E, n, 2)), rng.uniform(1, 10, (E, n))
+    parked, held = rng.random((E, n)) < 0.2, rng.random((E, n)) < 0.5
+    modes = ["asymmetric", swapped][:E]
+    args = (x, v, pref, 0.5, theta, modes, 2.0, 0.05)
+    computed, given_matrices = (
+        rorca.rorca_velocities(*args, rules=rorca.Rules(parked, goals, held, m))
+        for m in (None, rorca_dense.matrices(theta, modes))
+    )
+    assert np.array_equal(computed, given_matrices)
+
+
 @pytest.mark.parametrize("dynamics", ["single_integrator", "unicycle"])
 def test_the_core_hands_r_orca_its_own_matrices_and_keeps_them_current(dynamics):
     """``State.omega`` is the core's weight matrix itself, rewritten in place by a reset and by

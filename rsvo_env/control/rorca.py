@@ -276,7 +276,7 @@ def rorca_velocities(
     neighbour, an agent's preferred speed is capped (:func:`arrival_capped`), only the agents
     ``held`` (E, N) if given; these three are ``rules`` (:class:`Rules`, None: none of them),
     and so are the weight matrices ``omega`` (E, N, N) of ``theta`` and ``modes`` where the caller
-    keeps them (read up to ``DENSE_MAX_AGENTS`` agents, not computed again)."""
+    keeps them (read, not computed again)."""
     parked, goals, held, omega = (None, None, None, None) if rules is None else rules
     E, n = positions.shape[:2]
     M = E * n
@@ -304,7 +304,11 @@ def rorca_velocities(
         rorca_dense.stage(n, motion, W, tied, park, hold, settings, pref, out)
     else:
         I, J = pairs.candidate_pairs(positions, neighbor_dist)
-        w = np.ascontiguousarray(pairs.weights_of(theta, modes, I, J))
+        if omega is None:
+            w = np.ascontiguousarray(pairs.weights_of(theta, modes, I, J))
+        else:  # the same numbers, gathered
+            w = pairs.omega_pairs(np.ascontiguousarray(omega, dtype=np.float64).reshape(M, n),
+                                  I, J, n)  # fmt: skip
         lists = _neighbor_lists(I, J, x, np.inf, M)
         settings = (K, float(u_max), float(tau), float(dt))
         threads.launch(_stage_serial, _stage_parallel, M, motion, lists, w, tied, park, hold,
