@@ -64,7 +64,7 @@ def _half_planes(x, v, radii, I, J, share, tau, dt, parked, seen):
             me, other = (I[p], J[p]) if side == 0 else (J[p], I[p])
             vo = seen[other] if parked[me] and not parked[other] else v[other]
             row = plane(x, v, radii, me, other, vo, share[p, side], share[p, 1 - side],
-                         1.0 / tau, dt)  # fmt: skip
+                        1.0 / tau, dt)  # fmt: skip
             k = p + side * P
             A[k, 0], A[k, 1], b[k] = row
     return A, b
