@@ -336,7 +336,7 @@ def reference_velocities(x, v, pref, radii, theta, u_max, dt, tau, parked, goals
 
     n = len(x)
     # an agent held short of a goal under its own body counts as parked
-    parked = parked | (held & (np.hypot(*(goals - x).T) <= radii))
+    parked = parked | (held & (np.hypot(*(goals - x).T) <= rorca.GOAL_REACH * radii))
     I, J = pairs.candidate_pairs(x[None], 10.0 * float(radii.max()))
     w = pairs.weights_of(theta[None], ["asymmetric"], I, J)
     s = 1.0 - w[:, 0]
