@@ -116,8 +116,8 @@ class Simulator:
         self.radii = scenario.radii  # (N,) body radii
         self.plain = scenario.plain  # identical bodies, one bound, no obstacles: kept once
         self.state = State.empty(self.num_envs, n, self.k, scenario.num_obstacles)
-        # up to DENSE_MAX agents the matrices exist from the start and Weights writes them in
-        # place: the state holds the very arrays, for R-ORCA to read
+        # up to weights.DENSE_MAX (1,024) agents the matrices exist from the start and Weights
+        # writes them in place: the state holds the very arrays, for R-ORCA to read
         self.state.omega = self.weights.matrix
         self._bodies: dict[int, Bodies | None] = {}
         self.metrics = EpisodeMetrics(
