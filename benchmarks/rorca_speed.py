@@ -108,7 +108,9 @@ def main(argv: list[str] | None = None) -> int:
         "step with given actions at 3.03 M agent-steps/s. After 239f385, envs of at most 64 "
         "agents run R-ORCA's dense stage (the core's weight matrices read, no pair or neighbour "
         "lists): `nominal_actions()` alone went from 0.75 to 0.57 us an agent in this crowd "
-        "(three runs each of the two checkouts, alternating, the same load).",
+        "(three runs each of the two checkouts, alternating, the same load). At b7d9819, with "
+        "the speed limit an octagon solved by the filter's 2-D solver, 0.72, 0.88 and 0.82, and "
+        "0.31x; since, ORCA's own linear programs within the speed disk (`rsvo_env.qp.disk`).",
         "",
     ]
     Path(args.out).write_text("\n".join(lines))

@@ -18,12 +18,12 @@ def metrics(capsys, args):
 
 def test_simulate_runs_the_scenarios_controller_and_nominal_chooses(capsys):
     """docs/cli.md's numbers: the paper's controller 138 / 278 / 489 (what reproduce reports),
-    R-ORCA, the circular swap's own, 216 / 297 / 505."""
+    R-ORCA, the circular swap's own, 154 / 286 / 486."""
     assert metrics(capsys, ["--nominal", "move_to_goal"]) == [138, 278, 489]
-    assert metrics(capsys, []) == [216, 297, 505]
-    assert metrics(capsys, ["--nominal", "rorca"]) == [216, 297, 505]
+    assert metrics(capsys, []) == [154, 286, 486]
+    assert metrics(capsys, ["--nominal", "rorca"]) == [154, 286, 486]
     doc = " ".join((Path(__file__).parents[1] / "docs" / "cli.md").read_text().split())
-    assert "138 / 278 / 489" in doc and "216 / 297 / 505" in doc
+    assert "138 / 278 / 489" in doc and "154 / 286 / 486" in doc
 
 
 def test_simulate_refuses_a_controller_the_model_cannot_take(capsys):

@@ -328,11 +328,11 @@ def test_paired_theta_names_a_bad_count(bad):
 
 def reference_velocities(x, v, pref, radii, theta, u_max, dt, tau, parked, goals, held, K):
     """R-ORCA assembled from its parts as it was before it became one compiled stage: every
-    pair's half-planes (``_half_planes``), ORCA's nearest-K rule by a lexsort, the octagon, the
-    exact solve agent by agent, the sidestep re-solve, the speed clip. One env (N agents);
+    pair's half-planes (``_half_planes``), ORCA's nearest-K rule by a lexsort, the disk's solve
+    agent by agent, the sidestep re-solve, the speed clip. One env (N agents);
     ``parked`` before the rule for agents whose goals are blocked."""
     from rsvo_env.geometry import pairs
-    from rsvo_env.qp import exact
+    from rsvo_env.qp import disk
 
     n = len(x)
     # an agent held short of a goal under its own body counts as parked
@@ -351,23 +351,16 @@ def reference_velocities(x, v, pref, radii, theta, u_max, dt, tau, parked, goals
     keep = np.zeros(len(owner), dtype=bool)
     keep[by] = np.arange(len(by)) - first < K
     owner, A, b = owner[keep], A[keep], b[keep]
-    # the octagon's rows normalised as the solver stores a row; the half-planes' normals are
-    # unit as built, and stored as they are
-    octagon = np.stack([np.cos(np.arange(8) * np.pi / 4), np.sin(np.arange(8) * np.pi / 4)], -1)
-    norm = np.hypot(octagon[:, 0], octagon[:, 1])[:, None]
-    octagon = np.hstack([octagon / norm, u_max * np.cos(np.pi / 8) / norm])
-    owner = np.concatenate([owner, np.repeat(np.arange(n), 8)])
-    rows = np.concatenate([np.column_stack([A, b]), np.tile(octagon, (n, 1))])
-    rows = rows[np.argsort(owner, kind="stable")]
+    rows = np.column_stack([A, b])[np.argsort(owner, kind="stable")]
     offsets = np.zeros(n + 1, dtype=np.int64)
     offsets[1:] = np.cumsum(np.bincount(owner, minlength=n))
     out = np.empty((n, 2))
     for i in range(n):
         own = np.ascontiguousarray(rows[offsets[i] : offsets[i + 1]])
-        exact.solve_point(*pref[i], own, len(own), -u_max, -u_max, u_max, u_max, out[i])
+        bisectors = np.empty_like(own)
+        disk.solve_disk(*pref[i], own, len(own), u_max, bisectors, out[i])
         if np.sqrt(out[i] @ out[i]) < rorca.SIDESTEP * np.sqrt(pref[i] @ pref[i]):  # sidestep
-            exact.solve_point(pref[i, 1], -pref[i, 0], own, len(own), -u_max, -u_max, u_max,
-                              u_max, out[i])  # fmt: skip
+            disk.solve_disk(pref[i, 1], -pref[i, 0], own, len(own), u_max, bisectors, out[i])
     return clip_norm(out, u_max)
 
 

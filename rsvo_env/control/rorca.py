@@ -11,8 +11,8 @@ the smallest change ``u`` of the relative velocity that leaves the truncated vel
 it, and ``omega = 1/2`` is ORCA. Unlike a filter's rows these are *active*: an agent parked on
 its goal whose velocity obstacle holds 0 must step aside, which is what makes crowds finish.
 The velocity is the one closest to the preferred velocity within the half-planes and the speed
-limit (an octagon inscribed in the disk), solved exactly by ``rsvo_env.qp.exact``; an
-empty polygon gives the least-violating velocity (ORCA's third linear program). The R-CBF
+disk, by ORCA's own linear programs (``rsvo_env.qp.disk``); where they leave no room, the
+velocity of the disk whose largest violation is least (ORCA's third). The R-CBF
 filter on top keeps the guarantee whatever this controller proposes. Envs of at most
 ``DENSE_MAX_AGENTS`` agents run :mod:`rsvo_env.control.rorca_dense`'s stage (the env's agents
 read in place, the weights from its matrix); larger ones this module's, over the pairs of the
@@ -38,7 +38,6 @@ from rsvo_env.control.rorca_agent import (  # noqa: F401
     cap_write,
     goal_gap,
     insert_nearest,
-    octagon_rows,
     plane,
     scratch,
     shares,
@@ -118,10 +117,10 @@ def _capped(a, x, g, pref, r, offsets, other, tau, held, out):
 
 
 @njit(cache=True, inline="always")
-def _agent(a, x, v, pref, r, lists, w, tied, park, settings, octagon, rows, near, out):
+def _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out):
     """Agent a's R-ORCA velocity (before the speed clip) into out[a]: the half-planes of its
-    ``K`` nearest candidates (ties: the earlier in its list), the ``octagon`` (its 8 rows,
-    normalised), the exact QP and the sidestep (:func:`rorca_agent.solve`).
+    ``K`` nearest candidates (ties: the earlier in its list), solved within the speed disk
+    with the sidestep (:func:`rorca_agent.solve`).
     ``lists``: :func:`_neighbor_lists`; ``settings``: (K, u_max, tau, dt); ``near``: scratch
     (widest list, 3)."""
     offsets, other, pair, side = lists
@@ -159,7 +158,7 @@ def _agent(a, x, v, pref, r, lists, w, tied, park, settings, octagon, rows, near
             x, v, r, a, j, vo, avoid, slack, inv_tau, dt
         )
         nrows += 1
-    solve(pref[a, 0], pref[a, 1], rows, nrows, octagon, u_max, out[a])
+    solve(pref[a, 0], pref[a, 1], rows, nrows, u_max, out[a])
 
 
 @njit(cache=True)
@@ -181,10 +180,9 @@ def _stage_serial(motion, lists, w, tied, park, held, settings, pref, out):
     for a in range(M):
         _capped(a, x, g, pref0, r, offsets, other, tau, held, pref)
     width = _widest_list(offsets)
-    octagon = octagon_rows(settings[1])
     rows, near = scratch(width, K)
     for a in range(M):
-        _agent(a, x, v, pref, r, lists, w, tied, park, settings, octagon, rows, near, out)
+        _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out)
 
 
 @njit(cache=True, parallel=True)
@@ -200,11 +198,10 @@ def _stage_parallel(motion, lists, w, tied, park, held, settings, pref, out):
         for a in range(c * chunk, min(M, (c + 1) * chunk)):
             _capped(a, x, g, pref0, r, offsets, other, tau, held, pref)
     width = _widest_list(offsets)
-    octagon = octagon_rows(settings[1])
     for c in prange(blocks):
         rows, near = scratch(width, K)
         for a in range(c * chunk, min(M, (c + 1) * chunk)):
-            _agent(a, x, v, pref, r, lists, w, tied, park, settings, octagon, rows, near, out)
+            _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out)
 
 
 def arrival_capped(
@@ -320,6 +317,5 @@ def rorca_velocities(
         settings = (K, float(u_max), float(tau), float(dt))
         threads.launch(_stage_serial, _stage_parallel, M, motion, lists, w, tied, park, hold,
                        settings, pref, out)  # fmt: skip
-    # where the half-planes leave no room the least-violating point may lie past the octagon
-    # (its rows are relaxed too): the speed limit holds regardless
+    # a point on the disk's edge lies on it only to rounding: the speed limit holds exactly
     return clip_norm(out, u_max).reshape(E, n, 2)

@@ -1,14 +1,14 @@
 """One agent's R-ORCA velocity, in pieces both compiled stages share (``rsvo_env.control.rorca``
 over flat pair lists, ``rsvo_env.control.rorca_dense`` over each env's agents): its half-plane
 against a neighbour (eq. ``rorca``), its shares of the avoidance and the slack, the K nearest,
-the exact solve within the speed limit with the sidestep, and the arrival cap."""
+the solve within the speed disk with the sidestep, and the arrival cap."""
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from rsvo_env.qp import exact
+from rsvo_env.qp import disk
 
 # below this fraction of its preferred speed an agent counts as held still (it sidesteps)
 SIDESTEP = 0.0625
@@ -20,10 +20,6 @@ SIDESTEP = 0.0625
 # goal for good; an agent still closing in keeps its speed (docs/liveness.md)
 ARRIVE = 2.0
 HOLD_SECONDS = 0.3
-# the speed limit as an octagon inscribed in its disk: 8 unit normals, the offset u_max cos(pi/8)
-_OCTAGON = np.stack(
-    [np.cos(np.arange(8) * np.pi / 4), np.sin(np.arange(8) * np.pi / 4)], axis=-1
-)
 
 
 @njit(cache=True, inline="always")
@@ -103,17 +99,16 @@ def insert_nearest(near, filled, keep, d2, k):
 
 
 @njit(cache=True, inline="always")
-def solve(px, py, rows, nrows, octagon, u_max, res):
-    """The velocity closest to (px, py) within ``rows[:nrows]`` and the ``octagon`` (appended)
-    into ``res``; an agent the half-planes hold still while it wants to move (a jam that is
-    symmetric, as in a ring around a common goal) sidesteps: the velocity closest to its
-    preferred one turned to its right, which the half-planes of touching neighbours let it
-    take."""
-    rows[nrows : nrows + 8] = octagon
-    nrows += 8
-    exact.solve_point(px, py, rows, nrows, -u_max, -u_max, u_max, u_max, res)
+def solve(px, py, rows, nrows, u_max, res):
+    """The velocity closest to (px, py) within ``rows[:nrows]`` and the speed disk ``u_max``
+    (ORCA's linear programs, :func:`rsvo_env.qp.disk.solve_disk`; the least-violating one of
+    the disk where they leave no room) into ``res``; ``rows[nrows:2 nrows]`` its scratch. Held
+    below ``SIDESTEP`` of its preferred speed, the agent takes the velocity closest to the
+    preferred one turned right instead (the sidestep: a held agent keeps moving)."""
+    bisectors = rows[nrows:]
+    disk.solve_disk(px, py, rows, nrows, u_max, bisectors, res)
     if np.sqrt(res[0] * res[0] + res[1] * res[1]) < SIDESTEP * np.sqrt(px * px + py * py):
-        exact.solve_point(py, -px, rows, nrows, -u_max, -u_max, u_max, u_max, res)
+        disk.solve_disk(py, -px, rows, nrows, u_max, bisectors, res)
 
 
 @njit(cache=True, inline="always")
@@ -145,18 +140,8 @@ def cap_write(a, pref, wanted, speed, dist, tau, gap, out):
 
 
 @njit(cache=True)
-def octagon_rows(u_max):
-    """The speed limit's 8 rows, normalised as :func:`exact.set_row` stores them."""
-    rows = np.empty((8, 3))
-    edge = u_max * np.cos(np.pi / 8)
-    for q in range(8):
-        exact.set_row(rows, q, _OCTAGON[q, 0], _OCTAGON[q, 1], edge)
-    return rows
-
-
-@njit(cache=True)
 def scratch(width, K):
-    """An agent's row space (its K nearest and the octagon) and the insertion's (every
-    candidate), for lists of at most ``width``."""
+    """An agent's row space (its K nearest, then as many rows of the solver's scratch) and the
+    insertion's (every candidate), for lists of at most ``width``."""
     kept = width if K < 0 else min(width, K)
-    return np.empty((kept + 8, 3)), np.empty((max(width, 1), 3))
+    return np.empty((2 * kept + 2, 3)), np.empty((max(width, 1), 3))

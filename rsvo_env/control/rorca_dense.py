@@ -19,7 +19,6 @@ from rsvo_env.control.rorca_agent import (
     cap_write,
     goal_gap,
     insert_nearest,
-    octagon_rows,
     plane,
     scratch,
     shares,
@@ -80,10 +79,10 @@ def _cap(a, n, x, g, pref0, r, held, tau, cut, pref):
 
 
 @njit(cache=True, inline="always")
-def _agent(a, n, x, v, pref, r, W, tied, park, settings, octagon, space, out):
+def _agent(a, n, x, v, pref, r, W, tied, park, settings, space, out):
     """Agent a's R-ORCA velocity (before the speed clip) into out[a], as the flat-list stage's
-    ``_agent`` gives it: the half-planes of its K nearest candidates (ties: the earlier), the
-    octagon, the exact QP and the sidestep. ``W``: the weight matrices as (E * N, N)."""
+    ``_agent`` gives it: the half-planes of its K nearest candidates (ties: the earlier), solved
+    within the speed disk with the sidestep. ``W``: the weight matrices as (E * N, N)."""
     K, u_max, tau, dt, cut = settings
     rows, near, cand, d2s = space
     count = _candidates(a, n, x, cut, cand, d2s)
@@ -108,7 +107,7 @@ def _agent(a, n, x, v, pref, r, W, tied, park, settings, octagon, space, out):
             x, v, r, a, j, vo, avoid, slack, 1.0 / tau, dt
         )
         nrows += 1
-    solve(pref[a, 0], pref[a, 1], rows, nrows, octagon, u_max, out[a])
+    solve(pref[a, 0], pref[a, 1], rows, nrows, u_max, out[a])
 
 
 @njit(cache=True)
@@ -127,10 +126,9 @@ def _stage_serial(n, motion, W, tied, park, held, settings, pref, out):
     M = x.shape[0]
     for a in range(M):
         _cap(a, n, x, g, pref0, r, held, tau, cut, pref)
-    octagon = octagon_rows(settings[1])
     space = _space(n, settings[0])
     for a in range(M):
-        _agent(a, n, x, v, pref, r, W, tied, park, settings, octagon, space, out)
+        _agent(a, n, x, v, pref, r, W, tied, park, settings, space, out)
 
 
 @njit(cache=True, parallel=True)
@@ -144,11 +142,10 @@ def _stage_parallel(n, motion, W, tied, park, held, settings, pref, out):
     for c in prange(blocks):
         for a in range(c * chunk, min(M, (c + 1) * chunk)):
             _cap(a, n, x, g, pref0, r, held, tau, cut, pref)
-    octagon = octagon_rows(settings[1])
     for c in prange(blocks):
         space = _space(n, settings[0])
         for a in range(c * chunk, min(M, (c + 1) * chunk)):
-            _agent(a, n, x, v, pref, r, W, tied, park, settings, octagon, space, out)
+            _agent(a, n, x, v, pref, r, W, tied, park, settings, space, out)
 
 
 def stage(
