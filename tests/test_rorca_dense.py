@@ -1,36 +1,33 @@
 """R-ORCA's stage for envs of at most DENSE_MAX_AGENTS agents (``rsvo_env/control/rorca_dense.py``):
 each agent reads the others of its env in place and its weights from the env's matrix, and the
-velocities are bit for bit those of the flat-list stage on every pair; the simulation core hands
-it its own matrices, kept current."""
+velocities are bit for bit those of the grid stage (``rsvo_env/control/rorca_grid.py``, the one
+for larger envs) run on the same envs; the simulation core hands it its own matrices, kept
+current."""
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env.control import rorca, rorca_dense
+from rsvo_env.control import rorca, rorca_dense, rorca_grid
 from rsvo_env.envs.vector import BatchedEnv
-from rsvo_env.geometry import pairs
-from rsvo_env.responsibility.svo import weight_matrix
+from rsvo_env.responsibility.svo import symmetric_envs, weight_matrix
 
 
-def flat_stage(x, v, pref, radii, theta, modes, K, parked, goals, held, u_max=2.0, dt=0.05):
-    """The flat-list stage on every pair of each env, as rorca_velocities ran it for small envs
-    before the dense stage (the same rules, the same cut)."""
+def grid_stage(x, v, pref, radii, theta, modes, K, parked, goals, held, u_max=2.0, dt=0.05):
+    """The grid stage (``rsvo_env/control/rorca_grid.py``, envs beyond 64 agents) on envs of
+    any size, with the rules and the cut rorca_velocities gives it, its weights from the
+    scores (1/2 in the symmetric envs) or the matrices where a weighting is a callable."""
     E, n = x.shape[:2]
     M = E * n
     f = lambda a: np.ascontiguousarray(a, dtype=np.float64).reshape(M, -1)  # noqa: E731
     xf, vf, pf, gf = f(x), f(v), f(pref), f(goals)
     r = f(np.broadcast_to(radii, (E, n))).reshape(M)
-    hold, park = held.reshape(M).copy(), parked.reshape(M).copy()
-    park |= rorca.goal_blocked(xf, gf, r, hold)
-    I, J = pairs.all_pairs(n, E)
-    w = np.ascontiguousarray(pairs.weights_of(theta, modes, I, J))
-    lists = rorca._neighbor_lists(I, J, xf, 10.0 * float(r.max()), M)
-    p, out = np.empty((M, 2)), np.empty((M, 2))
-    rorca._stage_serial((xf, vf, gf, pf, r), lists, w, True, park, hold,
-                        (K, u_max, 2.0, dt), p, out)  # fmt: skip
-    return rorca.clip_norm(out, u_max).reshape(E, n, 2)
+    omega = rorca_dense.matrices(theta, modes) if any(map(callable, modes)) else None
+    rules = (parked.reshape(M), held.reshape(M), True)
+    out = rorca_grid.stage(n, (xf, vf, gf, pf, r), theta, symmetric_envs(modes), omega, rules,
+                           (K, u_max, 2.0, dt, 10.0 * float(r.max())))  # fmt: skip
+    return out.reshape(E, n, 2)
 
 
 def swapped(theta):
@@ -41,7 +38,7 @@ def swapped(theta):
 @settings(deadline=None, max_examples=40)
 @given(st.integers(2, 64), st.integers(1, 3), st.integers(0, 2**32 - 1),
        st.sampled_from([-1, 3, 10]), st.booleans())  # fmt: skip
-def test_the_dense_stage_equals_the_flat_stage_bit_for_bit(n, E, seed, K, lattice):
+def test_the_dense_stage_equals_the_grid_stage_bit_for_bit(n, E, seed, K, lattice):
     """Mixed weightings (asymmetric, symmetric, a callable) across envs, agents parked, held
     and overlapping; on a lattice distances tie and the nearest K break ties by list order."""
     rng = np.random.default_rng(seed)
@@ -57,7 +54,7 @@ def test_the_dense_stage_equals_the_flat_stage_bit_for_bit(n, E, seed, K, lattic
     theta = rng.uniform(1, 10, (E, n))
     modes = ["asymmetric", "symmetric", swapped][:E]
     parked, held = rng.random((E, n)) < 0.2, rng.random((E, n)) < 0.5
-    expected = flat_stage(x, v, pref, radii, theta, modes, K, parked, goals, held)
+    expected = grid_stage(x, v, pref, radii, theta, modes, K, parked, goals, held)
     args = (x, v, pref, radii, theta, modes, 2.0, 0.05, 2.0)
     K = None if K < 0 else K
     W = rorca_dense.matrices(theta, modes)
@@ -72,7 +69,7 @@ def test_the_dense_stage_equals_the_flat_stage_bit_for_bit(n, E, seed, K, lattic
 @settings(deadline=None, max_examples=10)
 @given(st.integers(65, 200), st.integers(1, 2), st.integers(0, 2**32 - 1))
 def test_beyond_64_agents_the_matrices_given_are_gathered_into_the_same_weights(n, E, seed):
-    """The flat-list stage reads ``Rules.omega`` too (its pairs' entries): the velocities are
+    """The grid stage reads ``Rules.omega`` too (the kept pairs' entries): the velocities are
     those of the weights computed from the scores, bit for bit."""
     rng = np.random.default_rng(seed)
     x = rng.uniform(0, np.sqrt(n) * 1.3, (E, n, 2))

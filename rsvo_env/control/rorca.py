@@ -24,34 +24,26 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env.control import rorca_dense
+from rsvo_env.control import rorca_dense, rorca_grid
 
-# ARRIVE, HOLD_SECONDS and SIDESTEP are the rules' constants, read through this module
+# ARRIVE, GOAL_REACH, HOLD_SECONDS and SIDESTEP are the rules' constants, read through this
+# module
 from rsvo_env.control.rorca_agent import (  # noqa: F401
     ARRIVE,
+    GOAL_REACH,
     HOLD_SECONDS,
     SIDESTEP,
     cap_wanted,
     cap_write,
     goal_gap,
-    insert_nearest,
     plane,
-    scratch,
-    shares,
-    solve,
 )
-from rsvo_env.geometry import pairs
-from rsvo_env.responsibility.svo import Weighting
-from rsvo_env.util import sizes, threads
+from rsvo_env.responsibility.svo import Weighting, symmetric_envs
+from rsvo_env.util import sizes
 from rsvo_env.util.planar import clip_norm
-
-# an agent held within this many of its radii of its goal (1: the goal under its own body) yields
-# as if parked (goal_blocked); 2 to 4 measured, quicker crowds of 1,000 but the circular swap's
-# egoists no longer first at every size (docs/liveness.md)
-GOAL_REACH = 1.0
 
 
 @njit(cache=True)
@@ -114,94 +106,6 @@ def _capped(a, x, g, pref, r, offsets, other, tau, held, out):
         for k in range(offsets[a], offsets[a + 1]):
             gap = min(gap, goal_gap(a, other[k], x, g, r))
     cap_write(a, pref, wanted, speed, dist, tau, gap, out)
-
-
-@njit(cache=True, inline="always")
-def _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out):
-    """Agent a's R-ORCA velocity (before the speed clip) into out[a]: the half-planes of its
-    ``K`` nearest candidates (ties: the earlier in its list), solved within the speed disk
-    with the sidestep (:func:`rorca_agent.solve`).
-    ``lists``: :func:`_neighbor_lists`; ``settings``: (K, u_max, tau, dt); ``near``: scratch
-    (widest list, 3)."""
-    offsets, other, pair, side = lists
-    K, u_max, tau, dt = settings
-    inv_tau = 1.0 / tau
-    start, stop = offsets[a], offsets[a + 1]
-    count = stop - start
-    keep = count if K < 0 else min(K, count)
-    bound, last = np.inf, stop
-    if keep < count:
-        # the K nearest (K is ORCA's 10); each squared distance kept in near[:, 2] for the
-        # pass below
-        filled = 0
-        for k in range(start, stop):
-            j = other[k]
-            dx, dy = x[a, 0] - x[j, 0], x[a, 1] - x[j, 1]
-            d2 = dx * dx + dy * dy
-            near[k - start, 2] = d2
-            filled = insert_nearest(near, filled, keep, d2, k)
-        bound, last = near[keep - 1, 0], near[keep - 1, 1]
-    nrows = 0
-    for k in range(start, stop):
-        if keep < count:
-            d2 = near[k - start, 2]
-            if d2 > bound or (d2 == bound and k > last):
-                continue
-        j = other[k]
-        p = pair[k]
-        first, second = (a, j) if side[k] == 0 else (j, a)
-        avoid, slack = shares(tied, park, first, second, w[p, 0], w[p, 1], side[k] == 0)
-        vo = pref[j] if park[a] and not park[j] else v[j]
-        # a unit normal by construction (a leg's or the cutoff circle's direction): stored as
-        # it is, where normalising it again would cost as much as the QP
-        rows[nrows, 0], rows[nrows, 1], rows[nrows, 2] = plane(
-            x, v, r, a, j, vo, avoid, slack, inv_tau, dt
-        )
-        nrows += 1
-    solve(pref[a, 0], pref[a, 1], rows, nrows, u_max, out[a])
-
-
-@njit(cache=True)
-def _widest_list(offsets):
-    widest = 0
-    for a in range(offsets.shape[0] - 1):
-        widest = max(widest, offsets[a + 1] - offsets[a])
-    return widest
-
-
-@njit(cache=True)
-def _stage_serial(motion, lists, w, tied, park, held, settings, pref, out):
-    """R-ORCA for every agent: ``motion`` (x, v, goals, preferred, radii), ``lists`` and
-    ``settings`` as :func:`_agent` reads them; the capped preferred velocities into ``pref``."""
-    x, v, g, pref0, r = motion
-    offsets, other = lists[0], lists[1]
-    K, tau = settings[0], settings[2]
-    M = x.shape[0]
-    for a in range(M):
-        _capped(a, x, g, pref0, r, offsets, other, tau, held, pref)
-    width = _widest_list(offsets)
-    rows, near = scratch(width, K)
-    for a in range(M):
-        _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out)
-
-
-@njit(cache=True, parallel=True)
-def _stage_parallel(motion, lists, w, tied, park, held, settings, pref, out):
-    """:func:`_stage_serial` over chunks of agents in parallel."""
-    x, v, g, pref0, r = motion
-    offsets, other = lists[0], lists[1]
-    K, tau = settings[0], settings[2]
-    M = x.shape[0]
-    chunk = 64
-    blocks = (M + chunk - 1) // chunk
-    for c in prange(blocks):
-        for a in range(c * chunk, min(M, (c + 1) * chunk)):
-            _capped(a, x, g, pref0, r, offsets, other, tau, held, pref)
-    width = _widest_list(offsets)
-    for c in prange(blocks):
-        rows, near = scratch(width, K)
-        for a in range(c * chunk, min(M, (c + 1) * chunk)):
-            _agent(a, x, v, pref, r, lists, w, tied, park, settings, rows, near, out)
 
 
 def arrival_capped(
@@ -284,38 +188,34 @@ def rorca_velocities(
     parked, goals, held, omega = (None, None, None, None) if rules is None else rules
     E, n = positions.shape[:2]
     M = E * n
-    radii = np.broadcast_to(radii, (E, n))
-    if neighbor_dist is None:
-        neighbor_dist = 10.0 * float(radii.max())
     flat = lambda a: np.ascontiguousarray(a, dtype=np.float64).reshape(M, -1)  # noqa: E731
     x, v, pref0 = flat(positions), flat(velocities), flat(preferred)
-    r = flat(radii).reshape(M)
+    radii = np.asarray(radii, dtype=np.float64)
+    # (N,) radii of one env are its flat ones: no broadcast (a call costs about 1 us)
+    r = radii if radii.size == M else np.broadcast_to(radii, (E, n))
+    r = np.ascontiguousarray(r).reshape(M)
+    if neighbor_dist is None:
+        neighbor_dist = 10.0 * float(r.max())
     # the arrival cap applies where goals are given (to the agents held, if given)
     g = x if goals is None else flat(goals)
     if goals is None:
         hold = np.zeros(M, np.bool_)
     else:
         hold = np.ones(M, np.bool_) if held is None else np.ascontiguousarray(held).reshape(M)
-    park = np.zeros(M, np.bool_)
-    if parked is not None:
-        park = np.ascontiguousarray(parked).reshape(M) | goal_blocked(x, g, r, hold)
     K = -1 if max_neighbors is None else int(max_neighbors)
-    pref, out = np.empty((M, 2)), np.empty((M, 2))
     motion, tied = (x, v, g, pref0, r), parked is not None
-    if n <= sizes.DENSE_MAX_AGENTS:  # every other agent of the env within neighbor_dist
-        W = rorca_dense.matrices(theta, modes) if omega is None else omega
-        settings = (K, float(u_max), float(tau), float(dt), float(neighbor_dist))
-        rorca_dense.stage(n, motion, W, tied, park, hold, settings, pref, out)
-    else:
-        I, J = pairs.candidate_pairs(positions, neighbor_dist)
-        if omega is None:
-            w = np.ascontiguousarray(pairs.weights_of(theta, modes, I, J))
-        else:  # the same numbers, gathered
-            w = pairs.omega_pairs(np.ascontiguousarray(omega, dtype=np.float64).reshape(M, n),
-                                  I, J, n)  # fmt: skip
-        lists = _neighbor_lists(I, J, x, np.inf, M)
-        settings = (K, float(u_max), float(tau), float(dt))
-        threads.launch(_stage_serial, _stage_parallel, M, motion, lists, w, tied, park, hold,
-                       settings, pref, out)  # fmt: skip
+    settings = (K, float(u_max), float(tau), float(dt), float(neighbor_dist))
+    flags = np.zeros(M, np.bool_) if parked is None else np.ascontiguousarray(parked, np.bool_)
+    if n > sizes.DENSE_MAX_AGENTS:  # a grid scan for each agent's K nearest, ORCA's way
+        if omega is None and any(callable(m) for m in modes):
+            omega = rorca_dense.matrices(theta, modes)
+        out = rorca_grid.stage(n, motion, theta, symmetric_envs(modes), omega,
+                               (flags.reshape(M), hold, tied), settings)  # fmt: skip
+        return out.reshape(E, n, 2)
+    # every other agent of the env within neighbor_dist
+    park = flags.reshape(M) | goal_blocked(x, g, r, hold) if tied else flags.reshape(M)
+    W = rorca_dense.matrices(theta, modes) if omega is None else omega
+    pref, out = np.empty((M, 2)), np.empty((M, 2))
+    rorca_dense.stage(n, motion, W, tied, park, hold, settings, pref, out)
     # a point on the disk's edge lies on it only to rounding: the speed limit holds exactly
     return clip_norm(out, u_max).reshape(E, n, 2)

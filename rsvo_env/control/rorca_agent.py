@@ -20,6 +20,10 @@ SIDESTEP = 0.0625
 # goal for good; an agent still closing in keeps its speed (docs/liveness.md)
 ARRIVE = 2.0
 HOLD_SECONDS = 0.3
+# an agent held within this many of its radii of its goal (1: the goal under its own body) yields
+# as if parked (rorca.goal_blocked); 2 to 4 measured, quicker crowds of 1,000 but the circular
+# swap's egoists no longer first at every size (docs/liveness.md)
+GOAL_REACH = 1.0
 
 
 @njit(cache=True, inline="always")

@@ -2,7 +2,7 @@
 candidates are the others of its env within the cut, read in place, and its weights straight
 from the env's weight matrix (E, N, N), which the simulation core keeps
 (``rsvo_env.sim.weights``): no pair list, no neighbour lists, no weights computed again. The
-velocities are bit for bit those of the flat-list stage (``rsvo_env.control.rorca``): the same
+velocities are bit for bit those of the grid stage (``rsvo_env.control.rorca_grid``): the same
 candidates in the same order (those after the agent in its env, then those before, the order
 of its pairs), the same arithmetic (``rsvo_env.control.rorca_agent``)."""
 
@@ -42,9 +42,9 @@ def matrices(theta: NDArray, modes: Sequence[Weighting]) -> NDArray[np.float64]:
 def _candidates(a, n, x, cut, cand, d2s):
     """Agent a's neighbours within ``cut`` into ``cand`` (their squared distances from a into
     ``d2s``): the agents after a in its env, then those before. Returns their count.
-    Branch-free, as ``rorca._neighbor_lists``: whether a neighbour is within the cut is a coin
-    toss in a dense crowd (one not within it is written and then overwritten). The distance is
-    the pair's as the lists compute it (``x_a - x_j`` is ``x_j - x_a`` negated, exactly)."""
+    Branch-free: whether a neighbour is within the cut is a coin toss in a dense crowd (one not
+    within it is written and then overwritten). The distance is the pair's whichever side
+    computes it (``x_a - x_j`` is ``x_j - x_a`` negated, exactly)."""
     base = a - a % n
     count = 0
     for j in range(a + 1, base + n):
@@ -80,9 +80,9 @@ def _cap(a, n, x, g, pref0, r, held, tau, cut, pref):
 
 @njit(cache=True, inline="always")
 def _agent(a, n, x, v, pref, r, W, tied, park, settings, space, out):
-    """Agent a's R-ORCA velocity (before the speed clip) into out[a], as the flat-list stage's
-    ``_agent`` gives it: the half-planes of its K nearest candidates (ties: the earlier), solved
-    within the speed disk with the sidestep. ``W``: the weight matrices as (E * N, N)."""
+    """Agent a's R-ORCA velocity (before the speed clip) into out[a], as the grid stage gives
+    it: the half-planes of its K nearest candidates (ties: the earlier), solved within the speed
+    disk with the sidestep. ``W``: the weight matrices as (E * N, N)."""
     K, u_max, tau, dt, cut = settings
     rows, near, cand, d2s = space
     count = _candidates(a, n, x, cut, cand, d2s)
