@@ -36,8 +36,8 @@ from rsvo_env.control.rorca_agent import (  # noqa: F401
     GOAL_REACH,
     HOLD_SECONDS,
     SIDESTEP,
+    cap_scale,
     cap_wanted,
-    cap_write,
     goal_gap,
     plane,
 )
@@ -59,53 +59,13 @@ def _half_planes(x, v, radii, I, J, share, tau, dt, parked, seen):
         for side in range(2):
             me, other = (I[p], J[p]) if side == 0 else (J[p], I[p])
             vo = seen[other] if parked[me] and not parked[other] else v[other]
-            row = plane(x, v, radii, me, other, vo, share[p, side], share[p, 1 - side],
+            mine = (x[me, 0], x[me, 1], v[me, 0], v[me, 1])
+            row = plane(mine, (x[other, 0], x[other, 1]), (vo[0], vo[1]),
+                        radii[me] + radii[other], share[p, side], share[p, 1 - side],
                         1.0 / tau, dt)  # fmt: skip
             k = p + side * P
             A[k, 0], A[k, 1], b[k] = row
     return A, b
-
-
-@njit(cache=True)
-def _neighbor_lists(I, J, x, cut, M):
-    """Each agent's candidate neighbours (CSR ``offsets`` (M + 1,), ``other``, ``pair``,
-    ``side``) among the pairs (I, J) within ``cut`` of each other: the pairs where it is first,
-    in pair order, then those where it is second, the order in which an agent's rows stack.
-    Branch-free: whether a pair is near is a coin toss in a dense crowd, and a mispredicted
-    branch a pair cost more than the rest (a pair not near writes to a spare last slot)."""
-    P = I.shape[0]
-    near = np.empty(P, dtype=np.int64)
-    offsets = np.zeros(M + 1, dtype=np.int64)
-    for p in range(P):
-        dx, dy = x[I[p], 0] - x[J[p], 0], x[I[p], 1] - x[J[p], 1]
-        near[p] = np.sqrt(dx * dx + dy * dy) <= cut
-        offsets[I[p] + 1] += near[p]
-        offsets[J[p] + 1] += near[p]
-    for a in range(M):
-        offsets[a + 1] += offsets[a]
-    total = offsets[M]
-    fill = offsets[:-1].copy()
-    other = np.empty(total + 1, dtype=np.int64)
-    pair = np.empty(total + 1, dtype=np.int64)
-    side = np.empty(total + 1, dtype=np.int8)
-    for s in range(2):
-        for p in range(P):
-            me, them = (I[p], J[p]) if s == 0 else (J[p], I[p])
-            k = near[p] * fill[me] + (1 - near[p]) * total
-            other[k], pair[k], side[k] = them, p, s
-            fill[me] += near[p]
-    return offsets, other[:total], pair[:total], side[:total]
-
-
-@njit(cache=True, inline="always")
-def _capped(a, x, g, pref, r, offsets, other, tau, held, out):
-    """Agent a's preferred velocity with the arrival cap (:func:`arrival_capped`) into out[a]."""
-    wanted, speed, dist = cap_wanted(a, x, g, pref, tau, held)
-    gap = np.inf
-    if wanted:
-        for k in range(offsets[a], offsets[a + 1]):
-            gap = min(gap, goal_gap(a, other[k], x, g, r))
-    cap_write(a, pref, wanted, speed, dist, tau, gap, out)
 
 
 def arrival_capped(
@@ -115,20 +75,32 @@ def arrival_capped(
     """``preferred`` (M, 2) scaled down to speed at most ``ARRIVE |goal - x| / tau`` where the
     look-ahead ``|preferred| tau`` passes the goal by more than the gap between the goal and a
     neighbour's body (pairs I, J; flat (M, 2) positions and goals, radii (M,)); with ``held``
-    (M,), only there."""
+    (M,), only there. The compiled stages cap as they scan; this form over a pair list is
+    their reference (``tests/test_rorca.py``)."""
     M = len(positions)
     f = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
-    offsets, other, _, _ = _neighbor_lists(I, J, f(positions), np.inf, M)
     hold = np.ones(M, dtype=np.bool_) if held is None else np.ascontiguousarray(held)
     out = np.empty((M, 2))
-    _cap_all(f(positions), f(goals), f(preferred), f(radii), offsets, other, float(tau), hold, out)
+    _cap_pairs(f(positions), f(goals), f(preferred), f(radii), np.asarray(I, np.int64),
+               np.asarray(J, np.int64), float(tau), hold, out)  # fmt: skip
     return out
 
 
 @njit(cache=True)
-def _cap_all(x, g, pref, r, offsets, other, tau, held, out):
-    for a in range(x.shape[0]):
-        _capped(a, x, g, pref, r, offsets, other, tau, held, out)
+def _cap_pairs(x, g, pref, r, I, J, tau, held, out):
+    """:func:`arrival_capped`: each agent's gap (the least over its pairs, in any order), then
+    its cap."""
+    M = x.shape[0]
+    gap = np.full(M, np.inf)
+    for p in range(I.shape[0]):
+        for me, other in ((I[p], J[p]), (J[p], I[p])):
+            near = goal_gap((g[me, 0], g[me, 1]), (x[other, 0], x[other, 1]), r[me], r[other])
+            gap[me] = min(gap[me], near)
+    for a in range(M):
+        pa = (pref[a, 0], pref[a, 1])
+        wanted, speed, dist = cap_wanted(pa, (x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), held[a], tau)
+        scale = cap_scale(wanted, speed, dist, tau, gap[a])
+        out[a, 0], out[a, 1] = pa[0] * scale, pa[1] * scale
 
 
 def goal_blocked(

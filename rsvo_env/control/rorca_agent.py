@@ -27,13 +27,14 @@ GOAL_REACH = 1.0
 
 
 @njit(cache=True, inline="always")
-def plane(x, v, radii, me, other, vo, avoid, slack, inv_tau, dt):
-    """Agent ``me``'s R-ORCA half-plane against ``other`` (read at velocity ``vo``) as a row
-    ``(ax, ay, b)`` of ``A . v <= b``, ``(ax, ay)`` a unit normal: ``avoid`` its share of the
-    avoidance, ``slack`` of the slack (eq. ``rorca``)."""
-    rx, ry = x[other, 0] - x[me, 0], x[other, 1] - x[me, 1]
-    wx0, wy0 = v[me, 0] - vo[0], v[me, 1] - vo[1]
-    R = radii[me] + radii[other]
+def plane(mine, other, vo, R, avoid, slack, inv_tau, dt):
+    """An agent's R-ORCA half-plane against a neighbour as a row ``(ax, ay, b)`` of
+    ``A . v <= b``, ``(ax, ay)`` a unit normal (eq. ``rorca``): ``mine`` the agent's (x, y, vx,
+    vy), ``other`` the neighbour's position, ``vo`` the velocity at which the agent reads it
+    (:func:`seen`), ``R`` the sum of their radii, ``avoid`` the agent's share of the avoidance,
+    ``slack`` of the slack. Scalars in and out: see :func:`seen`."""
+    rx, ry = other[0] - mine[0], other[1] - mine[1]
+    wx0, wy0 = mine[2] - vo[0], mine[3] - vo[1]
     d2, R2 = rx * rx + ry * ry, R * R
     if d2 > R2:
         wx, wy = wx0 - inv_tau * rx, wy0 - inv_tau * ry
@@ -63,24 +64,36 @@ def plane(x, v, radii, me, other, vo, avoid, slack, inv_tau, dt):
     # A . u > 0 (A the row below): the current velocity already meets the row, and u is room
     # left to close (slack), not avoidance
     sh = avoid if dy * cx - dx * cy <= 0.0 else slack
-    px, py = v[me, 0] + sh * cx, v[me, 1] + sh * cy
+    px, py = mine[2] + sh * cx, mine[3] + sh * cy
     # the half-plane det(d, point - v) <= 0 as a row
     return dy, -dx, dy * px - dx * py
 
 
 @njit(cache=True, inline="always")
-def shares(tied, park, first, second, w0, w1, me_first):
-    """(avoid, slack): an agent's shares against a neighbour in the pair (``first``,
-    ``second``) whose weights are ``w0`` (first's) and ``w1`` (second's); ``me_first``: the
-    agent is the pair's first. With the parked rule (``tied``), an agent parked on its goal
-    takes all of the avoidance from one en route, reading it at its preferred velocity so as to
-    step aside before it is pushed: an egoist at rest would otherwise stand as a wall (the
-    shares still sum to 1)."""
+def seen(me_parked, other_parked, pref_x, pref_y, v_x, v_y):
+    """The velocity at which an agent reads a neighbour: the neighbour's preferred one
+    (``pref_x``, ``pref_y``) where the agent is parked and the neighbour is not
+    (:func:`shares`), else its current one. Scalars in and out: an array row is a view, and a
+    view, or an array handed to an inlined function, costs atomic reference counts, as much as
+    the row's arithmetic."""
+    if me_parked and not other_parked:
+        return pref_x, pref_y
+    return v_x, v_y
+
+
+@njit(cache=True, inline="always")
+def shares(tied, park_first, park_second, w0, w1, me_first):
+    """(avoid, slack): an agent's shares against a neighbour in the pair (first, second) whose
+    weights are ``w0`` (first's) and ``w1`` (second's), ``park_first`` and ``park_second``
+    whether each is parked; ``me_first``: the agent is the pair's first. With the parked rule
+    (``tied``), an agent parked on its goal takes all of the avoidance from one en route,
+    reading it at its preferred velocity so as to step aside before it is pushed: an egoist at
+    rest would otherwise stand as a wall (the shares still sum to 1)."""
     if tied:
         s0 = 1.0 - w0
-        if park[first] and not park[second]:
+        if park_first and not park_second:
             s0 = 1.0
-        elif park[second] and not park[first]:
+        elif park_second and not park_first:
             s0 = 0.0
         s1 = 1.0 - s0
     else:
@@ -89,63 +102,49 @@ def shares(tied, park, first, second, w0, w1, me_first):
 
 
 @njit(cache=True, inline="always")
-def insert_nearest(near, filled, keep, d2, k):
-    """One candidate (squared distance ``d2``, position ``k``) into the ``keep`` nearest so far,
-    ``near[:filled]`` sorted by distance (ties: the earlier stays first); returns the new fill."""
-    if filled == keep and d2 >= near[keep - 1, 0]:
-        return filled
-    pos = min(filled, keep - 1)
-    while pos > 0 and near[pos - 1, 0] > d2:
-        near[pos, 0], near[pos, 1] = near[pos - 1, 0], near[pos - 1, 1]
-        pos -= 1
-    near[pos, 0], near[pos, 1] = d2, k
-    return min(filled + 1, keep)
+def solve(px, py, rows, nrows, u_max, bisectors):
+    """The velocity (x, y) closest to (px, py) within ``rows[:nrows]`` and the speed disk
+    ``u_max`` (ORCA's linear programs, :func:`rsvo_env.qp.disk.solve`; the least-violating one
+    of the disk where they leave no room); ``bisectors`` its scratch. Held below ``SIDESTEP`` of
+    its preferred speed, the agent takes the velocity closest to the preferred one turned right
+    instead (the sidestep: a held agent keeps moving)."""
+    x, y, _ = disk.solve(px, py, rows, nrows, u_max, bisectors)
+    if np.sqrt(x * x + y * y) < SIDESTEP * np.sqrt(px * px + py * py):
+        x, y, _ = disk.solve(py, -px, rows, nrows, u_max, bisectors)
+    return x, y
 
 
 @njit(cache=True, inline="always")
-def solve(px, py, rows, nrows, u_max, res):
-    """The velocity closest to (px, py) within ``rows[:nrows]`` and the speed disk ``u_max``
-    (ORCA's linear programs, :func:`rsvo_env.qp.disk.solve_disk`; the least-violating one of
-    the disk where they leave no room) into ``res``; ``rows[nrows:2 nrows]`` its scratch. Held
-    below ``SIDESTEP`` of its preferred speed, the agent takes the velocity closest to the
-    preferred one turned right instead (the sidestep: a held agent keeps moving)."""
-    bisectors = rows[nrows:]
-    disk.solve_disk(px, py, rows, nrows, u_max, bisectors, res)
-    if np.sqrt(res[0] * res[0] + res[1] * res[1]) < SIDESTEP * np.sqrt(px * px + py * py):
-        disk.solve_disk(py, -px, rows, nrows, u_max, bisectors, res)
-
-
-@njit(cache=True, inline="always")
-def cap_wanted(a, x, g, pref, tau, held):
-    """(wanted, speed, dist): whether agent a's arrival cap can apply (only then can the gap to
-    a neighbour tell), its preferred speed and its goal distance."""
-    px, py = pref[a, 0], pref[a, 1]
-    speed = np.sqrt(px * px + py * py)
-    gx, gy = g[a, 0] - x[a, 0], g[a, 1] - x[a, 1]
+def cap_wanted(pref, x, goal, held, tau):
+    """(wanted, speed, dist): whether an agent's arrival cap can apply (only then can the gap to
+    a neighbour tell), its preferred speed and its goal distance; ``pref``, ``x``, ``goal`` its
+    preferred velocity, position and goal as pairs of scalars (:func:`seen` says why)."""
+    speed = np.sqrt(pref[0] * pref[0] + pref[1] * pref[1])
+    gx, gy = goal[0] - x[0], goal[1] - x[1]
     dist = np.sqrt(gx * gx + gy * gy)
-    return held[a] and speed * tau > ARRIVE * dist, speed, dist
+    return held and speed * tau > ARRIVE * dist, speed, dist
 
 
 @njit(cache=True, inline="always")
-def goal_gap(a, j, x, g, r):
-    """The gap between agent a's goal and neighbour j's body."""
-    dx, dy = g[a, 0] - x[j, 0], g[a, 1] - x[j, 1]
-    return np.sqrt(dx * dx + dy * dy) - r[a] - r[j]
+def goal_gap(goal, other, r_me, r_other):
+    """The gap between an agent's ``goal`` and the body of a neighbour at ``other``."""
+    dx, dy = goal[0] - other[0], goal[1] - other[1]
+    return np.sqrt(dx * dx + dy * dy) - r_me - r_other
 
 
 @njit(cache=True, inline="always")
-def cap_write(a, pref, wanted, speed, dist, tau, gap, out):
-    """Agent a's preferred velocity into out[a], scaled to ``ARRIVE dist / tau`` where the
-    look-ahead ``speed tau`` passes the goal by more than the ``gap``."""
+def cap_scale(wanted, speed, dist, tau, gap):
+    """The factor of an agent's preferred velocity: ``ARRIVE dist / (tau speed)`` where the
+    look-ahead ``speed tau`` passes the goal by more than the ``gap``, else 1."""
     scale = 1.0
     if wanted and speed * tau - dist > gap:
         scale = ARRIVE * dist / (tau * speed)
-    out[a, 0], out[a, 1] = pref[a, 0] * scale, pref[a, 1] * scale
+    return scale
 
 
 @njit(cache=True)
 def scratch(width, K):
-    """An agent's row space (its K nearest, then as many rows of the solver's scratch) and the
-    insertion's (every candidate), for lists of at most ``width``."""
-    kept = width if K < 0 else min(width, K)
-    return np.empty((2 * kept + 2, 3)), np.empty((max(width, 1), 3))
+    """An agent's rows (its K nearest), the solver's scratch (as many) and the insertion's
+    (every candidate), for lists of at most ``width``."""
+    kept = max(width if K < 0 else min(width, K), 1)
+    return np.empty((kept, 3)), np.empty((kept, 3)), np.empty((max(width, 1), 3))

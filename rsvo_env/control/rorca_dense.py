@@ -15,17 +15,20 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from rsvo_env.control.rorca_agent import (
+    cap_scale,
     cap_wanted,
-    cap_write,
     goal_gap,
-    insert_nearest,
     plane,
     scratch,
+    seen,
     shares,
     solve,
 )
 from rsvo_env.responsibility.svo import Weighting, named_weights, symmetric_envs, weight_matrix
 from rsvo_env.util import threads
+
+# agents a chunk of the parallel form
+CHUNK = 64
 
 
 def matrices(theta: NDArray, modes: Sequence[Weighting]) -> NDArray[np.float64]:
@@ -38,114 +41,111 @@ def matrices(theta: NDArray, modes: Sequence[Weighting]) -> NDArray[np.float64]:
     return W
 
 
-@njit(cache=True, inline="always")
-def _candidates(a, n, x, cut, cand, d2s):
-    """Agent a's neighbours within ``cut`` into ``cand`` (their squared distances from a into
-    ``d2s``): the agents after a in its env, then those before. Returns their count.
-    Branch-free: whether a neighbour is within the cut is a coin toss in a dense crowd (one not
-    within it is written and then overwritten). The distance is the pair's whichever side
-    computes it (``x_a - x_j`` is ``x_j - x_a`` negated, exactly)."""
-    base = a - a % n
-    count = 0
-    for j in range(a + 1, base + n):
-        count = _consider(a, j, x, cut, cand, d2s, count)
-    for j in range(base, a):
-        count = _consider(a, j, x, cut, cand, d2s, count)
-    return count
-
-
-@njit(cache=True, inline="always")
-def _consider(a, j, x, cut, cand, d2s, count):
-    dx, dy = x[a, 0] - x[j, 0], x[a, 1] - x[j, 1]
-    d2 = dx * dx + dy * dy
-    cand[count] = j
-    d2s[count] = d2
-    return count + (np.sqrt(d2) <= cut)
-
-
-@njit(cache=True, inline="always")
-def _cap(a, n, x, g, pref0, r, held, tau, cut, pref):
-    """Agent a's preferred velocity with the arrival cap into ``pref`` (``rorca._capped``), its
-    neighbours within ``cut`` scanned only where the cap can apply."""
-    wanted, speed, dist = cap_wanted(a, x, g, pref0, tau, held)
-    gap = np.inf
-    if wanted:
-        base = a - a % n
-        for j in range(base, base + n):
-            dx, dy = x[a, 0] - x[j, 0], x[a, 1] - x[j, 1]
-            if j != a and np.sqrt(dx * dx + dy * dy) <= cut:
-                gap = min(gap, goal_gap(a, j, x, g, r))
-    cap_write(a, pref0, wanted, speed, dist, tau, gap, pref)
-
-
-@njit(cache=True, inline="always")
-def _agent(a, n, x, v, pref, r, W, tied, park, settings, space, out):
-    """Agent a's R-ORCA velocity (before the speed clip) into out[a], as the grid stage gives
-    it: the half-planes of its K nearest candidates (ties: the earlier), solved within the speed
-    disk with the sidestep. ``W``: the weight matrices as (E * N, N)."""
-    K, u_max, tau, dt, cut = settings
-    rows, near, cand, d2s = space
-    count = _candidates(a, n, x, cut, cand, d2s)
-    keep = count if K < 0 else min(K, count)
-    bound, last = np.inf, count
-    if keep < count:
-        filled = 0
-        for c in range(count):
-            filled = insert_nearest(near, filled, keep, d2s[c], c)
-        bound, last = near[keep - 1, 0], near[keep - 1, 1]
-    base = a - a % n
-    nrows = 0
-    for c in range(count):
-        if keep < count and (d2s[c] > bound or (d2s[c] == bound and c > last)):
-            continue
-        j = cand[c]
-        first, second = min(a, j), max(a, j)
-        w0, w1 = W[first, second - base], W[second, first - base]
-        avoid, slack = shares(tied, park, first, second, w0, w1, a < j)
-        vo = pref[j] if park[a] and not park[j] else v[j]
-        rows[nrows, 0], rows[nrows, 1], rows[nrows, 2] = plane(
-            x, v, r, a, j, vo, avoid, slack, 1.0 / tau, dt
-        )
-        nrows += 1
-    solve(pref[a, 0], pref[a, 1], rows, nrows, u_max, out[a])
+@njit(cache=True)
+def _caps(lo, hi, n, motion, held, tau, cut, pref):
+    """Agents lo..hi's preferred velocities with the arrival cap into ``pref``
+    (``rorca._capped``), their neighbours within ``cut`` scanned only where the cap can apply.
+    Every pass is a function called once a block, its helpers given scalars: an array handed to
+    an inlined helper costs two atomic reference counts, as much as an agent's arithmetic."""
+    x, g, pref0, r = motion[0], motion[2], motion[3], motion[4]
+    for a in range(lo, hi):
+        ga, pa = (g[a, 0], g[a, 1]), (pref0[a, 0], pref0[a, 1])
+        wanted, speed, dist = cap_wanted(pa, (x[a, 0], x[a, 1]), ga, held[a], tau)
+        gap = np.inf
+        if wanted:
+            base = a - a % n
+            for j in range(base, base + n):
+                dx, dy = x[a, 0] - x[j, 0], x[a, 1] - x[j, 1]
+                if j != a and np.sqrt(dx * dx + dy * dy) <= cut:
+                    gap = min(gap, goal_gap(ga, (x[j, 0], x[j, 1]), r[a], r[j]))
+        scale = cap_scale(wanted, speed, dist, tau, gap)
+        pref[a, 0], pref[a, 1] = pa[0] * scale, pa[1] * scale
 
 
 @njit(cache=True)
-def _space(n, K):
-    rows, near = scratch(n - 1, K)
-    return rows, near, np.empty(max(n - 1, 1), dtype=np.int64), np.empty(max(n - 1, 1))
+def _bound(d2s, count, keep, near):
+    """(bound, last): the squared distance of the ``keep``-th nearest of ``d2s[:count]`` and
+    its position (ties: the earlier is the nearer), by insertion into ``near`` (keep, 2)."""
+    filled = 0
+    for c in range(count):
+        d2 = d2s[c]
+        if filled == keep and d2 >= near[keep - 1, 0]:
+            continue
+        pos = min(filled, keep - 1)
+        while pos > 0 and near[pos - 1, 0] > d2:
+            near[pos, 0], near[pos, 1] = near[pos - 1, 0], near[pos - 1, 1]
+            pos -= 1
+        near[pos, 0], near[pos, 1] = d2, c
+        filled = min(filled + 1, keep)
+    return near[keep - 1, 0], near[keep - 1, 1]
+
+
+@njit(cache=True)
+def _agents(lo, hi, n, x, v, pref, r, W, tied, park, settings, out):
+    """Agents lo..hi's R-ORCA velocities (before the speed clip) into ``out``, as the grid stage
+    gives them: the half-planes of each one's K nearest candidates (ties: the earlier), solved
+    within the speed disk with the sidestep. The candidates: the others of its env within the
+    cut, those after it, then those before (the order of its pairs), tested without a branch
+    (whether one is within the cut is a coin toss in a dense crowd; one not within it is written
+    and then overwritten). ``W``: the weight matrices as (E * n, n)."""
+    K, u_max, tau, dt, cut = settings
+    rows, bisectors, near = scratch(n - 1, K)
+    cand, d2s = np.empty(max(n - 1, 1), dtype=np.int64), np.empty(max(n - 1, 1))
+    for a in range(lo, hi):
+        base = a - a % n
+        xa, ya = x[a, 0], x[a, 1]
+        count = 0
+        for t in range(1, n):
+            j = a + t
+            j = j - n if j >= base + n else j
+            # the pair's distance whichever side computes it (x_a - x_j is x_j - x_a negated)
+            dx, dy = xa - x[j, 0], ya - x[j, 1]
+            d2 = dx * dx + dy * dy
+            cand[count], d2s[count] = j, d2
+            count += np.sqrt(d2) <= cut
+        keep = count if K < 0 else min(K, count)
+        bound, last = np.inf, count
+        if keep < count:
+            bound, last = _bound(d2s, count, keep, near)
+        mine = (xa, ya, v[a, 0], v[a, 1])
+        nrows = 0
+        for c in range(count):
+            if keep < count and (d2s[c] > bound or (d2s[c] == bound and c > last)):
+                continue
+            j = cand[c]
+            first, second = min(a, j), max(a, j)
+            w0, w1 = W[first, second - base], W[second, first - base]
+            avoid, slack = shares(tied, park[first], park[second], w0, w1, a < j)
+            vo = seen(park[a], park[j], pref[j, 0], pref[j, 1], v[j, 0], v[j, 1])
+            rows[nrows, 0], rows[nrows, 1], rows[nrows, 2] = plane(
+                mine, (x[j, 0], x[j, 1]), vo, r[a] + r[j], avoid, slack, 1.0 / tau, dt
+            )
+            nrows += 1
+        out[a, 0], out[a, 1] = solve(pref[a, 0], pref[a, 1], rows, nrows, u_max, bisectors)
 
 
 @njit(cache=True)
 def _stage_serial(n, motion, W, tied, park, held, settings, pref, out):
     """R-ORCA for every agent of envs of ``n``: ``motion`` (x, v, goals, preferred, radii),
     flat (E * n, ...); ``settings`` (K, u_max, tau, dt, cut); the capped preferred velocities
-    into ``pref``."""
-    x, v, g, pref0, r = motion
-    tau, cut = settings[2], settings[4]
-    M = x.shape[0]
-    for a in range(M):
-        _cap(a, n, x, g, pref0, r, held, tau, cut, pref)
-    space = _space(n, settings[0])
-    for a in range(M):
-        _agent(a, n, x, v, pref, r, W, tied, park, settings, space, out)
+    into ``pref``. Every cap before any solve: a solve reads its neighbours' capped
+    velocities."""
+    M = motion[0].shape[0]
+    _caps(0, M, n, motion, held, settings[2], settings[4], pref)
+    _agents(0, M, n, motion[0], motion[1], pref, motion[4], W, tied, park, settings, out)
 
 
 @njit(cache=True, parallel=True)
 def _stage_parallel(n, motion, W, tied, park, held, settings, pref, out):
     """:func:`_stage_serial` over chunks of agents in parallel."""
-    x, v, g, pref0, r = motion
-    tau, cut = settings[2], settings[4]
+    x, v, r = motion[0], motion[1], motion[4]
     M = x.shape[0]
-    chunk = 64
-    blocks = (M + chunk - 1) // chunk
+    blocks = (M + CHUNK - 1) // CHUNK
     for c in prange(blocks):
-        for a in range(c * chunk, min(M, (c + 1) * chunk)):
-            _cap(a, n, x, g, pref0, r, held, tau, cut, pref)
+        _caps(c * CHUNK, min(M, (c + 1) * CHUNK), n, motion, held, settings[2], settings[4], pref)
     for c in prange(blocks):
-        space = _space(n, settings[0])
-        for a in range(c * chunk, min(M, (c + 1) * chunk)):
-            _agent(a, n, x, v, pref, r, W, tied, park, settings, space, out)
+        _agents(c * CHUNK, min(M, (c + 1) * CHUNK), n, x, v, pref, r, W, tied, park, settings,
+                out)  # fmt: skip
 
 
 def stage(

@@ -20,11 +20,12 @@ from numpy.typing import NDArray
 
 from rsvo_env.control.rorca_agent import (
     GOAL_REACH,
+    cap_scale,
     cap_wanted,
-    cap_write,
     goal_gap,
     plane,
     scratch,
+    seen,
     shares,
     solve,
 )
@@ -106,7 +107,8 @@ def _scan(s, n, data, index, cut, keep, tau, space, pref):
     base = e * n
     lo0, lo1, c = geometry[e, 0], geometry[e, 1], geometry[e, 2]
     nx, ny = int(geometry[e, 3]), int(geometry[e, 4])
-    wanted, speed, dist = cap_wanted(s, xs, gs, ps, tau, holds)
+    gs_s, ps_s = (gs[s, 0], gs[s, 1]), (ps[s, 0], ps[s, 1])
+    wanted, speed, dist = cap_wanted(ps_s, (xs[s, 0], xs[s, 1]), gs_s, holds[s], tau)
     cut2 = cut * cut
     # the cells a hair beyond the cut too: |dx| may round above the cut where d^2 is within it
     reach = cut * (1.0 + 1e-12)
@@ -124,7 +126,7 @@ def _scan(s, n, data, index, cut, keep, tau, space, pref):
                 continue
             within += 1
             if wanted:
-                gap = min(gap, goal_gap(s, j, xs, gs, rs))
+                gap = min(gap, goal_gap(gs_s, (xs[j, 0], xs[j, 1]), rs[s], rs[j]))
             # the agent's pairs: first those with the agents after it, then before it
             other = perm[j]
             key = other + M * (other < me)
@@ -137,7 +139,8 @@ def _scan(s, n, data, index, cut, keep, tau, space, pref):
                 # nearer than the farthest kept (a scan in space order replaces few)
                 d2s[worst], keys[worst], kept[worst] = d2, key, j
                 worst = _worst(d2s, keys, keep)
-    cap_write(s, ps, wanted, speed, dist, tau, gap, pref)
+    scale = cap_scale(wanted, speed, dist, tau, gap)
+    pref[s, 0], pref[s, 1] = ps_s[0] * scale, ps_s[1] * scale
     return filled, within
 
 
@@ -205,11 +208,12 @@ def _solve_block(lo, hi, n, perm, data, lists, weighting, tied, settings, out):
     pref, nbr, count = lists
     weight, symmetric, cosines = weighting
     K, u_max, tau, dt, cut = settings
-    rows, _ = scratch(nbr.shape[1], nbr.shape[1])
+    rows, bisectors, _ = scratch(nbr.shape[1], nbr.shape[1])
     inv_tau = 1.0 / tau
     for s in range(lo, hi):
         # once an agent: an integer division costs as much as a row's arithmetic
         half = cosines and symmetric[s // n]
+        mine = (xs[s, 0], xs[s, 1], vs[s, 0], vs[s, 1])
         for k in range(count[s]):
             j = nbr[s, k]
             me_first = perm[s] < perm[j]
@@ -219,14 +223,15 @@ def _solve_block(lo, hi, n, perm, data, lists, weighting, tied, settings, out):
                 w1 = 1.0 - w0
             else:
                 w0, w1 = weight[s, k, 0], weight[s, k, 1]
-            avoid, slack = shares(tied, parks, first, second, w0, w1, me_first)
-            vo = pref[j] if parks[s] and not parks[j] else vs[j]
+            avoid, slack = shares(tied, parks[first], parks[second], w0, w1, me_first)
+            vo = seen(parks[s], parks[j], pref[j, 0], pref[j, 1], vs[j, 0], vs[j, 1])
             # a unit normal by construction (a leg's or the cutoff circle's direction): stored
             # as it is, where normalising it again would cost as much as the QP
             rows[k, 0], rows[k, 1], rows[k, 2] = plane(
-                xs, vs, rs, s, j, vo, avoid, slack, inv_tau, dt
+                mine, (xs[j, 0], xs[j, 1]), vo, rs[s] + rs[j], avoid, slack, inv_tau, dt
             )
-        solve(pref[s, 0], pref[s, 1], rows, count[s], u_max, out[perm[s]])
+        me = perm[s]
+        out[me, 0], out[me, 1] = solve(pref[s, 0], pref[s, 1], rows, count[s], u_max, bisectors)
 
 
 @njit(cache=True, inline="always")
@@ -237,33 +242,11 @@ def _lists(M, keep):
     return lists, np.empty(M, np.int64)
 
 
-@njit(cache=True)
-def _stage_serial(n, motion, theta, rules, W, symmetric, settings, out):
-    """R-ORCA for every agent of envs of ``n`` (:func:`stage`), pass after pass: the grid and
-    the data in cell order, each agent's K nearest and capped preferred velocity, their pairs'
-    weights, the solves, the speed clip."""
-    K = settings[0]
-    M = motion[0].shape[0]
-    index = _index(motion[0], n, settings[4])
-    data = _gather(index[0], motion, theta, rules[0], rules[1], rules[2])
-    keep = FIRST_WIDTH if K < 0 else K
-    lists, within = _lists(M, keep)
-    _list_block(0, M, n, data, index, settings, keep, lists, within)
-    if K < 0 and M > 0 and within.max() > keep:  # not every neighbour fitted: again, all
-        keep = within.max()
-        lists, within = _lists(M, keep)
-        _list_block(0, M, n, data, index, settings, keep, lists, within)
-    weight = np.empty((M, lists[1].shape[1], 2))
-    _weigh_block(0, M, n, index[0], data[5], lists, W, weight)
-    weighting = (weight, symmetric, W.shape[0] == 0)
-    _solve_block(0, M, n, index[0], data, lists, weighting, rules[2], settings, out)
-    # a point on the disk's edge lies on it only to rounding: the speed limit holds exactly
-    _clip(out, settings[1], 1.0, out)
-
-
 @njit(cache=True, parallel=True)
-def _stage_parallel(n, motion, theta, rules, W, symmetric, settings, out):
-    """:func:`_stage_serial` with each pass over chunks of agents in parallel."""
+def _stage(n, motion, theta, rules, W, symmetric, settings, out):
+    """R-ORCA for every agent of envs of ``n`` (:func:`stage`), pass after pass, each over chunks
+    of agents in parallel: the grid and the data in cell order, each agent's K nearest and
+    capped preferred velocity, their pairs' weights, the solves, the speed clip."""
     K = settings[0]
     M = motion[0].shape[0]
     blocks = (M + CHUNK - 1) // CHUNK
@@ -308,7 +291,10 @@ def stage(
     th = np.ascontiguousarray(theta, dtype=np.float64).reshape(M)
     K, u_max, tau, dt, cut = settings
     out = np.empty((M, 2))
-    threads.launch(_stage_serial, _stage_parallel, M, n, motion, th, rules, W,
+    # the grid stage serves envs beyond 64 agents, where the prange form is the faster on one
+    # thread too (threads.OUTLINED_THRESHOLD): its only form
+    work = max(M, threads.OUTLINED_THRESHOLD)
+    threads.launch(_stage, _stage, work, n, motion, th, rules, W,
                    np.ascontiguousarray(symmetric, dtype=np.bool_),
                    (int(K), float(u_max), float(tau), float(dt), float(cut)), out)  # fmt: skip
     return out

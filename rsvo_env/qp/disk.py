@@ -107,13 +107,20 @@ def _least_violation(rows, nrows, begin, r, x, y, bisectors):
     return x, y
 
 
-@njit(cache=True)
-def solve_disk(px, py, rows, nrows, r, bisectors, res):
+@njit(cache=True, inline="always")
+def solve(px, py, rows, nrows, r, bisectors):
     """The velocity closest to (px, py) within ``rows[:nrows]`` (``a . v <= b``, unit normals)
-    and the disk ``|v| <= r`` into ``res``; where they leave no room, the least-violating velocity
-    of the disk. ``bisectors``: scratch (nrows, 3). Returns whether there was room."""
+    and the disk ``|v| <= r``; where they leave no room, the least-violating velocity of the
+    disk. ``bisectors``: scratch (nrows, 3). Returns (x, y, whether there was room); scalars, not
+    an array row: a view of an array costs two atomic reference counts, as much as the solve."""
     x, y, failed = _program(rows, nrows, r, px, py, False)
     if failed < nrows:
         x, y = _least_violation(rows, nrows, failed, r, x, y, bisectors)
-    res[0], res[1] = x, y
-    return failed == nrows
+    return x, y, failed == nrows
+
+
+@njit(cache=True)
+def solve_disk(px, py, rows, nrows, r, bisectors, res):
+    """:func:`solve` into ``res``; returns whether there was room."""
+    res[0], res[1], room = solve(px, py, rows, nrows, r, bisectors)
+    return room
