@@ -112,3 +112,22 @@ def test_the_core_hands_r_orca_its_own_matrices_and_keeps_them_current(dynamics)
         finally:
             s.omega = sim.weights.matrix
         assert np.array_equal(with_core, computed)
+
+
+@settings(deadline=None)
+@given(cut=st.floats(1e-150, 1e150), scale=st.floats(0.0, 4.0), ulps=st.integers(-4, 4))
+def test_within_decides_the_cut_as_the_square_root_does(cut, scale, ulps):
+    """``rorca_agent.within``: ``d2 <= within(cut)`` is ``sqrt(d2) <= cut`` exactly (the stages
+    test the cut without a square root), at the threshold and a few ulps either side of
+    ``cut^2``, in any units."""
+    from rsvo_env.control.rorca_agent import within
+
+    T = within(cut)
+    d2s = [scale * cut * cut, cut * cut, T]
+    for d2 in list(d2s):
+        for _ in range(abs(ulps)):
+            d2 = np.nextafter(d2, np.inf if ulps > 0 else 0.0)
+        d2s.append(d2)
+    for d2 in d2s:
+        assert (d2 <= T) == (np.sqrt(d2) <= cut), (cut, d2)
+    assert within(np.inf) == np.inf

@@ -43,7 +43,6 @@ from rsvo_env.control.rorca_agent import (  # noqa: F401
 )
 from rsvo_env.responsibility.svo import Weighting, symmetric_envs
 from rsvo_env.util import sizes
-from rsvo_env.util.planar import clip_norm
 
 
 @njit(cache=True)
@@ -178,16 +177,12 @@ def rorca_velocities(
     motion, tied = (x, v, g, pref0, r), parked is not None
     settings = (K, float(u_max), float(tau), float(dt), float(neighbor_dist))
     flags = np.zeros(M, np.bool_) if parked is None else np.ascontiguousarray(parked, np.bool_)
+    rules = (flags.reshape(M), hold, tied)
     if n > sizes.DENSE_MAX_AGENTS:  # a grid scan for each agent's K nearest, ORCA's way
         if omega is None and any(callable(m) for m in modes):
             omega = rorca_dense.matrices(theta, modes)
-        out = rorca_grid.stage(n, motion, theta, symmetric_envs(modes), omega,
-                               (flags.reshape(M), hold, tied), settings)  # fmt: skip
-        return out.reshape(E, n, 2)
-    # every other agent of the env within neighbor_dist
-    park = flags.reshape(M) | goal_blocked(x, g, r, hold) if tied else flags.reshape(M)
-    W = rorca_dense.matrices(theta, modes) if omega is None else omega
-    pref, out = np.empty((M, 2)), np.empty((M, 2))
-    rorca_dense.stage(n, motion, W, tied, park, hold, settings, pref, out)
-    # a point on the disk's edge lies on it only to rounding: the speed limit holds exactly
-    return clip_norm(out, u_max).reshape(E, n, 2)
+        out = rorca_grid.stage(n, motion, theta, symmetric_envs(modes), omega, rules, settings)
+    else:  # every other agent of the env within neighbor_dist, its weights from the matrices
+        W = rorca_dense.matrices(theta, modes) if omega is None else omega
+        out = rorca_dense.stage(n, motion, W, rules, settings)
+    return out.reshape(E, n, 2)

@@ -133,6 +133,14 @@ def goal_gap(goal, other, r_me, r_other):
 
 
 @njit(cache=True, inline="always")
+def blocked(x, goal, radius, held):
+    """Whether an agent ``held`` short of its goal has it within ``GOAL_REACH`` of its own
+    ``radius`` (``rorca.goal_blocked``, the same arithmetic): then it yields as if parked."""
+    dx, dy = goal[0] - x[0], goal[1] - x[1]
+    return held and np.sqrt(dx * dx + dy * dy) <= GOAL_REACH * radius
+
+
+@njit(cache=True, inline="always")
 def cap_scale(wanted, speed, dist, tau, gap):
     """The factor of an agent's preferred velocity: ``ARRIVE dist / (tau speed)`` where the
     look-ahead ``speed tau`` passes the goal by more than the ``gap``, else 1."""
@@ -143,8 +151,20 @@ def cap_scale(wanted, speed, dist, tau, gap):
 
 
 @njit(cache=True)
+def within(cut):
+    """The largest squared distance whose square root is at most ``cut``: ``d2 <= within(cut)``
+    decides ``sqrt(d2) <= cut`` exactly (a correctly rounded square root is monotone) without a
+    square root."""
+    T = cut * cut
+    while T > 0.0 and np.sqrt(T) > cut:
+        T = np.nextafter(T, -np.inf)
+    while T < np.inf and np.sqrt(np.nextafter(T, np.inf)) <= cut:
+        T = np.nextafter(T, np.inf)
+    return T
+
+
+@njit(cache=True)
 def scratch(width, K):
-    """An agent's rows (its K nearest), the solver's scratch (as many) and the insertion's
-    (every candidate), for lists of at most ``width``."""
+    """An agent's rows (its K nearest of at most ``width``) and the solver's scratch (as many)."""
     kept = max(width if K < 0 else min(width, K), 1)
-    return np.empty((kept, 3)), np.empty((kept, 3)), np.empty((max(width, 1), 3))
+    return np.empty((kept, 3)), np.empty((kept, 3))

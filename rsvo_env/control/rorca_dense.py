@@ -15,6 +15,7 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from rsvo_env.control.rorca_agent import (
+    blocked,
     cap_scale,
     cap_wanted,
     goal_gap,
@@ -23,9 +24,12 @@ from rsvo_env.control.rorca_agent import (
     seen,
     shares,
     solve,
+    within,
 )
 from rsvo_env.responsibility.svo import Weighting, named_weights, symmetric_envs, weight_matrix
 from rsvo_env.util import threads
+from rsvo_env.util.borrowed import borrow
+from rsvo_env.util.planar import clip2
 
 # agents a chunk of the parallel form
 CHUNK = 64
@@ -42,55 +46,48 @@ def matrices(theta: NDArray, modes: Sequence[Weighting]) -> NDArray[np.float64]:
 
 
 @njit(cache=True)
-def _caps(lo, hi, n, motion, held, tau, cut, pref):
+def _caps(lo, hi, n, motion, rules, tau, cut, pref, park):
     """Agents lo..hi's preferred velocities with the arrival cap into ``pref``
-    (``rorca._capped``), their neighbours within ``cut`` scanned only where the cap can apply.
+    (``rorca._capped``), their neighbours within ``cut`` scanned only where the cap can apply,
+    and whether each counts as parked into ``park``: ``rules`` (parked, held, tied), an agent
+    held short of a goal under its own body parked too where the parked rule is on (``tied``).
     Every pass is a function called once a block, its helpers given scalars: an array handed to
     an inlined helper costs two atomic reference counts, as much as an agent's arithmetic."""
     x, g, pref0, r = motion[0], motion[2], motion[3], motion[4]
+    parked, held, tied = rules
+    cut2 = within(cut)
     for a in range(lo, hi):
-        ga, pa = (g[a, 0], g[a, 1]), (pref0[a, 0], pref0[a, 1])
-        wanted, speed, dist = cap_wanted(pa, (x[a, 0], x[a, 1]), ga, held[a], tau)
+        xa, ga, pa = (x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), (pref0[a, 0], pref0[a, 1])
+        park[a] = tied and (parked[a] or blocked(xa, ga, r[a], held[a]))
+        wanted, speed, dist = cap_wanted(pa, xa, ga, held[a], tau)
         gap = np.inf
         if wanted:
             base = a - a % n
             for j in range(base, base + n):
                 dx, dy = x[a, 0] - x[j, 0], x[a, 1] - x[j, 1]
-                if j != a and np.sqrt(dx * dx + dy * dy) <= cut:
+                if j != a and dx * dx + dy * dy <= cut2:
                     gap = min(gap, goal_gap(ga, (x[j, 0], x[j, 1]), r[a], r[j]))
         scale = cap_scale(wanted, speed, dist, tau, gap)
         pref[a, 0], pref[a, 1] = pa[0] * scale, pa[1] * scale
 
 
 @njit(cache=True)
-def _bound(d2s, count, keep, near):
-    """(bound, last): the squared distance of the ``keep``-th nearest of ``d2s[:count]`` and
-    its position (ties: the earlier is the nearer), by insertion into ``near`` (keep, 2)."""
-    filled = 0
-    for c in range(count):
-        d2 = d2s[c]
-        if filled == keep and d2 >= near[keep - 1, 0]:
-            continue
-        pos = min(filled, keep - 1)
-        while pos > 0 and near[pos - 1, 0] > d2:
-            near[pos, 0], near[pos, 1] = near[pos - 1, 0], near[pos - 1, 1]
-            pos -= 1
-        near[pos, 0], near[pos, 1] = d2, c
-        filled = min(filled + 1, keep)
-    return near[keep - 1, 0], near[keep - 1, 1]
-
-
-@njit(cache=True)
-def _agents(lo, hi, n, x, v, pref, r, W, tied, park, settings, out):
-    """Agents lo..hi's R-ORCA velocities (before the speed clip) into ``out``, as the grid stage
+def _agents(lo, hi, n, x, v, pref, r, W, tied, park, settings, space, out):
+    """Agents lo..hi's R-ORCA velocities into ``out``, as the grid stage
     gives them: the half-planes of each one's K nearest candidates (ties: the earlier), solved
     within the speed disk with the sidestep. The candidates: the others of its env within the
     cut, those after it, then those before (the order of its pairs), tested without a branch
     (whether one is within the cut is a coin toss in a dense crowd; one not within it is written
-    and then overwritten). ``W``: the weight matrices as (E * n, n)."""
+    and then overwritten). ``W``: the weight matrices as (E * n, n); ``space`` the rows' and the
+    solver's scratch (``rorca_agent.scratch``), borrowed (``util.borrowed``): handed down the
+    inlined solve, counted arrays would cost a quarter of the time."""
     K, u_max, tau, dt, cut = settings
-    rows, bisectors, near = scratch(n - 1, K)
-    cand, d2s = np.empty(max(n - 1, 1), dtype=np.int64), np.empty(max(n - 1, 1))
+    rows, bisectors = borrow(space[0]), borrow(space[1])
+    width = max(n - 1, 1)
+    cand, kept = np.empty(width, np.int64), np.empty(width, np.int64)
+    # room for the distances to a multiple of 8 (one vector of them), the rest never nearer
+    d2s = np.full(width + 7, np.inf)
+    cut2 = within(cut)
     for a in range(lo, hi):
         base = a - a % n
         xa, ya = x[a, 0], x[a, 1]
@@ -102,60 +99,75 @@ def _agents(lo, hi, n, x, v, pref, r, W, tied, park, settings, out):
             dx, dy = xa - x[j, 0], ya - x[j, 1]
             d2 = dx * dx + dy * dy
             cand[count], d2s[count] = j, d2
-            count += np.sqrt(d2) <= cut
+            count += d2 <= cut2
         keep = count if K < 0 else min(K, count)
-        bound, last = np.inf, count
-        if keep < count:
-            bound, last = _bound(d2s, count, keep, near)
-        mine = (xa, ya, v[a, 0], v[a, 1])
+        # the K nearest, in candidate order: each one's rank (ties: the earlier is the nearer)
+        # counted without a branch (a sort's comparisons mispredict, and cost more than the
+        # count's K^2 sums), and the kept listed without one; the count over whole vectors of
+        # 8 (a remainder loop costs as much as the vectors before it)
+        padded = (count + 7) // 8 * 8
+        for m in range(count, padded):
+            d2s[m] = np.inf
         nrows = 0
         for c in range(count):
-            if keep < count and (d2s[c] > bound or (d2s[c] == bound and c > last)):
-                continue
-            j = cand[c]
+            d2, rank = d2s[c], 0
+            for m in range(padded):
+                rank += (d2s[m] < d2) | ((d2s[m] == d2) & (m < c))
+            kept[nrows] = cand[c]
+            nrows += rank < keep
+        mine = (xa, ya, v[a, 0], v[a, 1])
+        for k in range(nrows):
+            j = kept[k]
             first, second = min(a, j), max(a, j)
             w0, w1 = W[first, second - base], W[second, first - base]
             avoid, slack = shares(tied, park[first], park[second], w0, w1, a < j)
             vo = seen(park[a], park[j], pref[j, 0], pref[j, 1], v[j, 0], v[j, 1])
-            rows[nrows, 0], rows[nrows, 1], rows[nrows, 2] = plane(
+            rows[k, 0], rows[k, 1], rows[k, 2] = plane(
                 mine, (x[j, 0], x[j, 1]), vo, r[a] + r[j], avoid, slack, 1.0 / tau, dt
             )
-            nrows += 1
-        out[a, 0], out[a, 1] = solve(pref[a, 0], pref[a, 1], rows, nrows, u_max, bisectors)
+        u = solve(pref[a, 0], pref[a, 1], rows, nrows, u_max, bisectors)
+        # a point on the disk's edge lies on it only to rounding: the speed limit holds exactly
+        out[a, 0], out[a, 1] = clip2(u[0], u[1], u_max)
 
 
 @njit(cache=True)
-def _stage_serial(n, motion, W, tied, park, held, settings, pref, out):
-    """R-ORCA for every agent of envs of ``n``: ``motion`` (x, v, goals, preferred, radii),
-    flat (E * n, ...); ``settings`` (K, u_max, tau, dt, cut); the capped preferred velocities
-    into ``pref``. Every cap before any solve: a solve reads its neighbours' capped
-    velocities."""
+def _stage_serial(n, motion, W, rules, settings, pref, park, out):
+    """R-ORCA for every agent of envs of ``n`` (:func:`stage`); the capped preferred velocities
+    into ``pref``, who counts as parked into ``park``. Every cap before any solve: a solve reads
+    its neighbours' capped velocities."""
     M = motion[0].shape[0]
-    _caps(0, M, n, motion, held, settings[2], settings[4], pref)
-    _agents(0, M, n, motion[0], motion[1], pref, motion[4], W, tied, park, settings, out)
+    _caps(0, M, n, motion, rules, settings[2], settings[4], pref, park)
+    space = scratch(n - 1, settings[0])
+    _agents(0, M, n, motion[0], motion[1], pref, motion[4], W, rules[2], park, settings, space,
+            out)  # fmt: skip
 
 
 @njit(cache=True, parallel=True)
-def _stage_parallel(n, motion, W, tied, park, held, settings, pref, out):
+def _stage_parallel(n, motion, W, rules, settings, pref, park, out):
     """:func:`_stage_serial` over chunks of agents in parallel."""
     x, v, r = motion[0], motion[1], motion[4]
     M = x.shape[0]
     blocks = (M + CHUNK - 1) // CHUNK
     for c in prange(blocks):
-        _caps(c * CHUNK, min(M, (c + 1) * CHUNK), n, motion, held, settings[2], settings[4], pref)
+        _caps(c * CHUNK, min(M, (c + 1) * CHUNK), n, motion, rules, settings[2], settings[4],
+              pref, park)  # fmt: skip
     for c in prange(blocks):
-        _agents(c * CHUNK, min(M, (c + 1) * CHUNK), n, x, v, pref, r, W, tied, park, settings,
-                out)  # fmt: skip
+        space = scratch(n - 1, settings[0])
+        _agents(c * CHUNK, min(M, (c + 1) * CHUNK), n, x, v, pref, r, W, rules[2], park,
+                settings, space, out)  # fmt: skip
 
 
 def stage(
-    n: int, motion: tuple, omega: NDArray, tied: bool, park: NDArray, held: NDArray,
-    settings: tuple, pref: NDArray, out: NDArray,
-) -> None:  # fmt: skip
-    """R-ORCA's velocities into ``out`` (E * n, 2) for envs of ``n`` agents: ``motion`` (x, v,
-    goals, preferred, radii), flat; ``omega`` (E, n, n) the weight matrices; ``park``,
-    ``held`` (E * n,); ``settings`` (K, u_max, tau, dt, cut); the capped preferred velocities
-    into ``pref``."""
+    n: int, motion: tuple, omega: NDArray, rules: tuple, settings: tuple
+) -> NDArray[np.float64]:
+    """R-ORCA's velocities (E * n, 2), clipped to the speed limit, for envs of ``n`` agents:
+    ``motion`` (x, v, goals, preferred, radii), flat (E * n, ...); ``omega`` (E, n, n) the
+    weight matrices; ``rules`` (parked, held, tied): the agents parked and held (E * n,), and
+    whether the parked rule is on; ``settings`` (K, u_max, tau, dt, cut), K < 0 for every
+    neighbour within the cut."""
     W = np.ascontiguousarray(omega, dtype=np.float64).reshape(-1, n)
-    threads.launch(_stage_serial, _stage_parallel, len(pref), n, motion, W, tied, park, held,
-                   settings, pref, out)  # fmt: skip
+    M = motion[0].shape[0]
+    pref, park, out = np.empty((M, 2)), np.empty(M, np.bool_), np.empty((M, 2))
+    threads.launch(_stage_serial, _stage_parallel, M, n, motion, W, rules, settings, pref, park,
+                   out)  # fmt: skip
+    return out

@@ -19,7 +19,7 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from rsvo_env.control.rorca_agent import (
-    GOAL_REACH,
+    blocked,
     cap_scale,
     cap_wanted,
     goal_gap,
@@ -31,6 +31,7 @@ from rsvo_env.control.rorca_agent import (
 )
 from rsvo_env.responsibility.svo import share_of
 from rsvo_env.util import threads
+from rsvo_env.util.borrowed import borrow
 from rsvo_env.util.grid import _build, _span
 from rsvo_env.util.planar import _clip
 
@@ -77,9 +78,8 @@ def _gather(perm, motion, theta, parked, held, tied):
         xs[s, 0], xs[s, 1], vs[s, 0], vs[s, 1] = x[a, 0], x[a, 1], v[a, 0], v[a, 1]
         gs[s, 0], gs[s, 1], ps[s, 0], ps[s, 1] = g[a, 0], g[a, 1], pref0[a, 0], pref0[a, 1]
         rs[s], ths[s], holds[s] = r[a], theta[a], held[a]
-        dx, dy = g[a, 0] - x[a, 0], g[a, 1] - x[a, 1]
-        blocked = held[a] and np.sqrt(dx * dx + dy * dy) <= GOAL_REACH * r[a]
-        parks[s] = tied and (parked[a] or blocked)
+        held_short = blocked((x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a], held[a])
+        parks[s] = tied and (parked[a] or held_short)
     return xs, vs, gs, ps, rs, ths, parks, holds
 
 
@@ -197,18 +197,19 @@ def _weigh_block(lo, hi, n, perm, ths, lists, W, weight):
                 weight[s, k, 0] = np.cos(weight[s, k, 0])
 
 
-@njit(cache=True, inline="always")
-def _solve_block(lo, hi, n, perm, data, lists, weighting, tied, settings, out):
+@njit(cache=True)
+def _solve_block(lo, hi, n, perm, data, lists, weighting, tied, settings, space, out):
     """Agents lo..hi (cell order): the half-planes of their kept neighbours (``lists``: pref,
     nbr, count), solved within the speed disk with the sidestep (``rorca_agent.solve``), into
     ``out`` (M, 2) at their own indices. ``weighting`` (weight, symmetric, cosines): the
     weights ``weight`` (M, K, 2), or with ``cosines`` ``(1 + weight[..., 0]) / 2`` and 1 minus
-    that (1/2 in the ``symmetric`` (E,) envs), as ``geometry.pairs.scored_pairs`` gives them."""
+    that (1/2 in the ``symmetric`` (E,) envs), as ``geometry.pairs.scored_pairs`` gives them.
+    ``space``: the rows' and the solver's scratch, borrowed (``util.borrowed``)."""
     xs, vs, gs, ps, rs, ths, parks, holds = data
     pref, nbr, count = lists
     weight, symmetric, cosines = weighting
     K, u_max, tau, dt, cut = settings
-    rows, bisectors, _ = scratch(nbr.shape[1], nbr.shape[1])
+    rows, bisectors = borrow(space[0]), borrow(space[1])
     inv_tau = 1.0 / tau
     for s in range(lo, hi):
         # once an agent: an integer division costs as much as a row's arithmetic
@@ -268,8 +269,9 @@ def _stage(n, motion, theta, rules, W, symmetric, settings, out):
         _weigh_block(c * CHUNK, min(M, (c + 1) * CHUNK), n, index[0], data[5], lists, W, weight)
     weighting = (weight, symmetric, W.shape[0] == 0)
     for c in prange(blocks):
+        space = scratch(lists[1].shape[1], lists[1].shape[1])
         _solve_block(c * CHUNK, min(M, (c + 1) * CHUNK), n, index[0], data, lists, weighting,
-                     rules[2], settings, out)  # fmt: skip
+                     rules[2], settings, space, out)  # fmt: skip
     _clip(out, settings[1], 1.0, out)
 
 
