@@ -48,9 +48,10 @@ def matrices(theta: NDArray, modes: Sequence[Weighting]) -> NDArray[np.float64]:
 @njit(cache=True)
 def _caps(lo, hi, n, motion, rules, tau, cut, pref, park):
     """Agents lo..hi's preferred velocities with the arrival cap into ``pref``
-    (``rorca._capped``), their neighbours within ``cut`` scanned only where the cap can apply,
-    and whether each counts as parked into ``park``: ``rules`` (parked, held, tied), an agent
-    held short of a goal under its own body parked too where the parked rule is on (``tied``).
+    (``rorca.arrival_capped``), their neighbours within ``cut`` scanned only where the cap can
+    apply, and whether each counts as parked into ``park``: ``rules`` (parked, held, tied), an
+    agent held short of a goal under its own body parked too where the parked rule is on
+    (``tied``).
     Every pass is a function called once a block, its helpers given scalars: an array handed to
     an inlined helper costs two atomic reference counts, as much as an agent's arithmetic."""
     x, g, pref0, r = motion[0], motion[2], motion[3], motion[4]
@@ -73,14 +74,14 @@ def _caps(lo, hi, n, motion, rules, tau, cut, pref, park):
 
 @njit(cache=True)
 def _agents(lo, hi, n, x, v, pref, r, W, tied, park, settings, space, out):
-    """Agents lo..hi's R-ORCA velocities into ``out``, as the grid stage
-    gives them: the half-planes of each one's K nearest candidates (ties: the earlier), solved
-    within the speed disk with the sidestep. The candidates: the others of its env within the
-    cut, those after it, then those before (the order of its pairs), tested without a branch
-    (whether one is within the cut is a coin toss in a dense crowd; one not within it is written
-    and then overwritten). ``W``: the weight matrices as (E * n, n); ``space`` the rows' and the
-    solver's scratch (``rorca_agent.scratch``), borrowed (``util.borrowed``): handed down the
-    inlined solve, counted arrays would cost a quarter of the time."""
+    """Agents lo..hi's R-ORCA velocities into ``out``, as the grid stage gives them: the
+    half-planes of each one's K nearest candidates (ties: the earlier), solved within the speed
+    disk with the sidestep, clipped to the speed limit. The candidates: the others of its env
+    within the cut, those after it, then those before (the order of its pairs), tested without
+    a branch (whether one is within the cut is a coin toss in a dense crowd; one not within it
+    is written and then overwritten). ``W``: the weight matrices as (E * n, n); ``space`` the
+    rows' and the solver's scratch (``rorca_agent.scratch``), borrowed (``util.borrowed``):
+    handed down the inlined solve, counted arrays would cost a quarter of the time."""
     K, u_max, tau, dt, cut = settings
     rows, bisectors = borrow(space[0]), borrow(space[1])
     width = max(n - 1, 1)
