@@ -83,93 +83,85 @@ def _gather(perm, motion, theta, parked, held, tied):
     return xs, vs, gs, ps, rs, ths, parks, holds
 
 
-@njit(cache=True, inline="always")
-def _worst(d2s, keys, keep):
-    """The slot of the farthest of the kept (by distance, then key: the later pair)."""
-    w = 0
-    for k in range(1, keep):
-        if d2s[k] > d2s[w] or (d2s[k] == d2s[w] and keys[k] > keys[w]):
-            w = k
-    return w
+@njit(cache=True)
+def _list_block(lo, hi, n, data, index, settings, keep, lists, within):
+    """Agents lo..hi (cell order): each one's neighbours within the cut (their number into
+    ``within``), its ``keep`` nearest (ties: the earlier of its pairs) into ``nbr[s]`` in the
+    order of its pairs (the order its rows stack in) and their number into ``count[s]``
+    (``lists``: pref, nbr, count), and its capped preferred velocity into ``pref[s]`` (the gap
+    from its goal to every neighbour's body).
 
-
-@njit(cache=True, inline="always")
-def _scan(s, n, data, index, cut, keep, tau, space, pref):
-    """Agent s's (cell order) neighbours within the cut: its ``keep`` nearest (ties: the earlier
-    of its pairs) into ``space`` = (distances, keys, agents), its capped preferred velocity into
-    ``pref[s]`` (the gap from its goal to every neighbour's body). Returns (kept, within the
-    cut)."""
-    xs, vs, gs, ps, rs, ths, parks, holds = data
-    d2s, keys, kept = space
+    The scan lists the agents of the cells within reach that lie within the cut without a
+    branch (about half of those scanned lie beyond it, a coin toss a branch mispredicts), then
+    keeps the nearest by replacing the farthest kept (a scan in space order replaces few); the
+    kept are ordered by their rank among the keys, counted without a branch. No helper is
+    handed an array: an array handed to a function costs two atomic reference counts
+    (``util.borrowed``)."""
+    cut, tau = settings[4], settings[2]
+    xs, gs, ps, rs, holds = data[0], data[2], data[3], data[4], data[7]
     perm, start, geometry = index
+    pref, nbr, count = lists
     M = perm.shape[0]
-    e = s // n
-    base = e * n
-    lo0, lo1, c = geometry[e, 0], geometry[e, 1], geometry[e, 2]
-    nx, ny = int(geometry[e, 3]), int(geometry[e, 4])
-    gs_s, ps_s = (gs[s, 0], gs[s, 1]), (ps[s, 0], ps[s, 1])
-    wanted, speed, dist = cap_wanted(ps_s, (xs[s, 0], xs[s, 1]), gs_s, holds[s], tau)
+    width = nbr.shape[1]
+    d2s, keys, kept = np.empty(width), np.empty(width, np.int64), np.empty(width, np.int64)
+    # a scan reads only its own env's agents: at most n of them within the cut
+    near, near_d2 = np.empty(n, np.int64), np.empty(n)
     cut2 = cut * cut
     # the cells a hair beyond the cut too: |dx| may round above the cut where d^2 is within it
     reach = cut * (1.0 + 1e-12)
-    a0, b0 = _span(xs[s, 0], reach, lo0, c, nx)
-    a1, b1 = _span(xs[s, 1], reach, lo1, c, ny)
-    me = perm[s]
-    filled, within, gap, worst = 0, 0, np.inf, 0
-    for gx in range(a0, b0 + 1):
-        # cells a1..b1 of a column are consecutive: their agents are one run
-        for t in range(start[e, gx * ny + a1], start[e, gx * ny + b1 + 1]):
-            j = base + t
-            dx, dy = xs[s, 0] - xs[j, 0], xs[s, 1] - xs[j, 1]
-            d2 = dx * dx + dy * dy
-            if j == s or d2 > cut2:
-                continue
-            within += 1
-            if wanted:
+    for s in range(lo, hi):
+        e = s // n
+        base = e * n
+        lo0, lo1, c = geometry[e, 0], geometry[e, 1], geometry[e, 2]
+        nx, ny = int(geometry[e, 3]), int(geometry[e, 4])
+        xs_s = (xs[s, 0], xs[s, 1])
+        a0, b0 = _span(xs_s[0], reach, lo0, c, nx)
+        a1, b1 = _span(xs_s[1], reach, lo1, c, ny)
+        w = 0
+        for gx in range(a0, b0 + 1):
+            # cells a1..b1 of a column are consecutive: their agents are one run
+            for t in range(start[e, gx * ny + a1], start[e, gx * ny + b1 + 1]):
+                j = base + t
+                dx, dy = xs_s[0] - xs[j, 0], xs_s[1] - xs[j, 1]
+                d2 = dx * dx + dy * dy
+                near[w], near_d2[w] = j, d2
+                w += (d2 <= cut2) & (j != s)
+        within[s] = w
+        gs_s, ps_s = (gs[s, 0], gs[s, 1]), (ps[s, 0], ps[s, 1])
+        wanted, speed, dist = cap_wanted(ps_s, xs_s, gs_s, holds[s], tau)
+        gap = np.inf
+        if wanted:
+            for k in range(w):
+                j = near[k]
                 gap = min(gap, goal_gap(gs_s, (xs[j, 0], xs[j, 1]), rs[s], rs[j]))
+        scale = cap_scale(wanted, speed, dist, tau, gap)
+        pref[s, 0], pref[s, 1] = ps_s[0] * scale, ps_s[1] * scale
+        me = perm[s]
+        filled, worst = 0, 0
+        for k in range(w):
+            j, d2 = near[k], near_d2[k]
             # the agent's pairs: first those with the agents after it, then before it
             other = perm[j]
             key = other + M * (other < me)
+            changed = False
             if filled < keep:
                 d2s[filled], keys[filled], kept[filled] = d2, key, j
                 filled += 1
-                if filled == keep:
-                    worst = _worst(d2s, keys, keep)
+                changed = filled == keep
             elif keep > 0 and (d2 < d2s[worst] or (d2 == d2s[worst] and key < keys[worst])):
-                # nearer than the farthest kept (a scan in space order replaces few)
                 d2s[worst], keys[worst], kept[worst] = d2, key, j
-                worst = _worst(d2s, keys, keep)
-    scale = cap_scale(wanted, speed, dist, tau, gap)
-    pref[s, 0], pref[s, 1] = ps_s[0] * scale, ps_s[1] * scale
-    return filled, within
-
-
-@njit(cache=True, inline="always")
-def _listed(s, n, data, index, cut, keep, tau, space, pref, nbr, count):
-    """:func:`_scan`, the kept into ``nbr[s]`` in the order of the agent's pairs (the order its
-    rows stack in) and their number into ``count[s]``: each one's rank among the keys
-    (distinct) counted without a branch (a sort's comparisons of keys in scan order
-    mispredict, and cost more than the K^2 / 2 sums). Returns the number within the cut."""
-    filled, within = _scan(s, n, data, index, cut, keep, tau, space, pref)
-    keys, kept = space[1], space[2]
-    for k in range(filled):
-        rank = 0
-        for m in range(filled):
-            rank += keys[m] < keys[k]
-        nbr[s, rank] = kept[k]
-    count[s] = filled
-    return within
-
-
-@njit(cache=True, inline="always")
-def _list_block(lo, hi, n, data, index, settings, keep, lists, within):
-    """:func:`_listed` for agents lo..hi (cell order); ``lists``: (pref, nbr, count)."""
-    cut, tau = settings[4], settings[2]
-    pref, nbr, count = lists
-    width = nbr.shape[1]
-    space = np.empty(width), np.empty(width, np.int64), np.empty(width, np.int64)
-    for s in range(lo, hi):
-        within[s] = _listed(s, n, data, index, cut, keep, tau, space, pref, nbr, count)
+                changed = True
+            if changed:  # the farthest of the kept (by distance, then key: the later pair)
+                worst = 0
+                for m in range(1, keep):
+                    if d2s[m] > d2s[worst] or (d2s[m] == d2s[worst] and keys[m] > keys[worst]):
+                        worst = m
+        for k in range(filled):
+            rank = 0
+            for m in range(filled):
+                rank += keys[m] < keys[k]
+            nbr[s, rank] = kept[k]
+        count[s] = filled
 
 
 @njit(cache=True, inline="always")
