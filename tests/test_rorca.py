@@ -226,11 +226,11 @@ def test_an_agent_held_short_of_a_goal_under_its_body_yields_and_the_crowd_finis
 def test_goal_blocked_is_held_agents_with_the_goal_under_their_own_body(unit):
     """Only held agents count, and only where the goal lies within their own radius, in any
     unit of length (the boundary included)."""
-    x = unit * np.array([[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
-    g = unit * np.array([[0.3, 0.4], [0.3, 0.4], [0.0, 0.5000001], [0.0, 0.0]])
-    r = unit * np.array([0.5, 0.5, 0.5, 0.5])
-    held = np.array([True, False, True, True])
-    assert rorca.goal_blocked(x, g, r, held).tolist() == [True, False, False, True]
+    x = unit * np.array([[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
+    g = unit * np.array([[0.3, 0.4], [0.3, 0.4], [0.0, 0.5000001], [0.0, 0.0], [0.0, 0.5]])
+    r = unit * np.array([0.5, 0.5, 0.5, 0.5, 0.5])
+    held = np.array([True, False, True, True, True])
+    assert rorca.goal_blocked(x, g, r, held).tolist() == [True, False, False, True, True]
 
 
 def test_move_to_goal_is_kept_by_name_and_the_ramp_merge_keeps_its_lane_follower():

@@ -36,6 +36,7 @@ from rsvo_env.control.rorca_agent import (  # noqa: F401
     GOAL_REACH,
     HOLD_SECONDS,
     SIDESTEP,
+    blocked,
     cap_scale,
     cap_wanted,
     goal_gap,
@@ -112,9 +113,20 @@ def goal_blocked(
     seed 3: an egoist 0.15 m short of its goal pinned an altruist between two parked agents for
     20,000 steps). Parked, it yields, the neighbour passes, and it comes back
     (``docs/liveness.md``)."""
-    d = goals - positions
-    reach = GOAL_REACH * radii
-    return held & (np.sqrt(d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1]) <= reach)
+    shape = np.shape(positions)[:-1]
+    rows = lambda a: np.ascontiguousarray(np.broadcast_to(a, shape + (2,)), np.float64)  # noqa: E731
+    each = lambda a, t: np.ascontiguousarray(np.broadcast_to(a, shape), t).reshape(-1)  # noqa: E731
+    out = np.empty(int(np.prod(shape)), np.bool_)
+    _blocked_all(rows(positions).reshape(-1, 2), rows(goals).reshape(-1, 2),
+                 each(radii, np.float64), each(held, np.bool_), out)  # fmt: skip
+    return out.reshape(shape)
+
+
+@njit(cache=True)
+def _blocked_all(x, g, r, held, out):
+    """:func:`goal_blocked` over flat rows, by the stages' own rule (``rorca_agent.blocked``)."""
+    for a in range(x.shape[0]):
+        out[a] = blocked((x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a], held[a])
 
 
 class Rules(NamedTuple):

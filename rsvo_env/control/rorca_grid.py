@@ -33,7 +33,7 @@ from rsvo_env.responsibility.svo import share_of
 from rsvo_env.util import threads
 from rsvo_env.util.borrowed import borrow
 from rsvo_env.util.grid import _build, _span
-from rsvo_env.util.planar import _clip
+from rsvo_env.util.planar import clip2
 
 # the list width a call with every neighbour (K < 0) tries first; a crowd denser than that is
 # scanned again with its widest count
@@ -193,9 +193,10 @@ def _weigh_block(lo, hi, n, perm, ths, lists, W, weight):
 def _solve_block(lo, hi, n, perm, data, lists, weighting, tied, settings, space, out):
     """Agents lo..hi (cell order): the half-planes of their kept neighbours (``lists``: pref,
     nbr, count), solved within the speed disk with the sidestep (``rorca_agent.solve``), into
-    ``out`` (M, 2) at their own indices. ``weighting`` (weight, symmetric, cosines): the
-    weights ``weight`` (M, K, 2), or with ``cosines`` ``(1 + weight[..., 0]) / 2`` and 1 minus
-    that (1/2 in the ``symmetric`` (E,) envs), as ``geometry.pairs.scored_pairs`` gives them.
+    ``out`` (M, 2) at their own indices, clipped to the speed limit. ``weighting`` (weight,
+    symmetric, cosines): the weights ``weight`` (M, K, 2), or with ``cosines``
+    ``(1 + weight[..., 0]) / 2`` and 1 minus that (1/2 in the ``symmetric`` (E,) envs), as
+    ``geometry.pairs.scored_pairs`` gives them.
     ``space``: the rows' and the solver's scratch, borrowed (``util.borrowed``)."""
     xs, vs, gs, ps, rs, ths, parks, holds = data
     pref, nbr, count = lists
@@ -223,8 +224,10 @@ def _solve_block(lo, hi, n, perm, data, lists, weighting, tied, settings, space,
             rows[k, 0], rows[k, 1], rows[k, 2] = plane(
                 mine, (xs[j, 0], xs[j, 1]), vo, rs[s] + rs[j], avoid, slack, inv_tau, dt
             )
+        u = solve(pref[s, 0], pref[s, 1], rows, count[s], u_max, bisectors)
+        # a point on the disk's edge lies on it only to rounding: the speed limit holds exactly
         me = perm[s]
-        out[me, 0], out[me, 1] = solve(pref[s, 0], pref[s, 1], rows, count[s], u_max, bisectors)
+        out[me, 0], out[me, 1] = clip2(u[0], u[1], u_max)
 
 
 @njit(cache=True, inline="always")
@@ -239,7 +242,8 @@ def _lists(M, keep):
 def _stage(n, motion, theta, rules, W, symmetric, settings, out):
     """R-ORCA for every agent of envs of ``n`` (:func:`stage`), pass after pass, each over chunks
     of agents in parallel: the grid and the data in cell order, each agent's K nearest and
-    capped preferred velocity, their pairs' weights, the solves, the speed clip."""
+    capped preferred velocity, their pairs' weights, the solves (each clipped to the speed
+    limit)."""
     K = settings[0]
     M = motion[0].shape[0]
     blocks = (M + CHUNK - 1) // CHUNK
@@ -264,7 +268,6 @@ def _stage(n, motion, theta, rules, W, symmetric, settings, out):
         space = scratch(lists[1].shape[1], lists[1].shape[1])
         _solve_block(c * CHUNK, min(M, (c + 1) * CHUNK), n, index[0], data, lists, weighting,
                      rules[2], settings, space, out)  # fmt: skip
-    _clip(out, settings[1], 1.0, out)
 
 
 def stage(
