@@ -14,7 +14,7 @@ move-to-goal (today's controller, kept by name) at N = 100.
 Writes ``benchmarks/results/liveness.md`` and ``liveness.png``.
 
     python benchmarks/liveness.py [--quick] [--circular-only] [--symmetric-only] [--held-out]
-        [--big] [--learned RUN]
+        [--big] [--diagnose] [--learned RUN]
 """
 
 from __future__ import annotations
@@ -27,6 +27,8 @@ import numpy as np
 from liveness_report import (  # a sibling module: benchmarks/ is the script's own path
     BIG_CAP,
     BIG_HEADING,
+    DIAGNOSIS_CAP,
+    DIAGNOSIS_HEADING,
     DT,
     HELD_OUT_HEADING,
     HELD_OUT_SEEDS,
@@ -34,6 +36,7 @@ from liveness_report import (  # a sibling module: benchmarks/ is the script's o
     SYMMETRIC_HEADING,
     big_section,
     circular_section,
+    diagnosis_section,
     held_out_section,
     plot,
     replace_section,
@@ -51,11 +54,34 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 GAMMA = 20.0  # gamma dt = 1, as the training configs run the crowd
 ROTATIONS = 10  # circular swaps, each turned by a random angle
+# what holds the crowd of 10,000 back against ORCA (issue 45): the parts taken away one at a time
+NO_TURN = {"deadlock_resolution": "none"}
+NO_SPLIT = {**NO_TURN, "weighting": "symmetric"}
+DIAGNOSIS = (
+    ("R-ORCA behind the filter (the crowd table's setting)", {}),
+    ("the right-hand turn at 15 degrees, not 30", {"rh_angle_deg": 15.0}),
+    ("the right-hand rule only within 1.25 R, not 1.5 R", {"rh_trigger_factor": 1.25}),
+    ("R-ORCA's horizon 1 s, not 2 s", {"rorca_tau": 1.0}),
+    ("no right-hand rule", NO_TURN),
+    ("no right-hand rule, R-ORCA's bodies the filter's (`rorca_pad = 1`)",
+     {**NO_TURN, "rorca_pad": 1.0}),
+    ("no right-hand rule, the symmetric weighting", NO_SPLIT),
+    ("no right-hand rule, the symmetric weighting, `rorca_pad = 1`",
+     {**NO_SPLIT, "rorca_pad": 1.0}),
+    ("no right-hand rule, `rorca_pad = 1`, no filter", {**NO_TURN, "rorca_pad": 1.0,
+                                                        "safety_filter": False}),
+    ("no right-hand rule, the symmetric weighting, `rorca_pad = 1`, no filter",
+     {**NO_SPLIT, "rorca_pad": 1.0, "safety_filter": False}),
+)  # fmt: skip
 
 
 def ours(n: int, seed: int, cap: int, scenario: str = "crowd", **kw) -> dict:
-    """One filtered episode of ``scenario`` under its scripted controller: arrivals by step."""
-    env = BatchedEnv(scenario, num_envs=1, safety_filter=True, num_agents=n, max_steps=cap,
+    """One episode of ``scenario`` under its scripted controller, filtered unless
+    ``safety_filter=False``: arrivals by step."""
+    filtered = kw.pop("safety_filter", True)
+    if not filtered:  # the filter's parameters have no owner without it
+        kw.pop("gamma", None)
+    env = BatchedEnv(scenario, num_envs=1, safety_filter=filtered, num_agents=n, max_steps=cap,
                      dt=kw.pop("dt", DT), **kw)  # fmt: skip
     env.reset(seed=seed)
     start = env.sim.state.positions[0].copy(), env.sim.state.goals[0].copy()
@@ -103,6 +129,17 @@ def orca(start: np.ndarray, goals: np.ndarray, cap: int, R=1.0, u_max=2.0, k=2.0
 
 def _makespan(arrived: list[int], n: int) -> int | None:
     return len(arrived) if arrived and arrived[-1] == n else None
+
+
+def diagnosis(n: int = 10_000, seed: int = 0, cap: int = DIAGNOSIS_CAP) -> list[dict]:
+    """The crowd of ``n`` under each configuration of ``DIAGNOSIS`` (R-ORCA's rules, the
+    weighting, the filter taken away one at a time), and ORCA on the same starts and goals."""
+    rows = []
+    for label, kw in DIAGNOSIS:
+        r = ours(n, seed, cap, **{"theta_range": (1.0, 10.0), "gamma": GAMMA, **kw})
+        rows.append({"label": label, "ours": r})
+        print("diagnosis", label, r["arrived"][-1], r["closest"], flush=True)
+    return [*rows, {"label": "ORCA (pyrvo)", "ours": orca(*rows[0]["ours"]["start"], cap)}]
 
 
 def crowds(sizes, seeds, cap, weighting: str = "asymmetric") -> list[dict]:
@@ -223,6 +260,12 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="run the crowd of 10,000 alone, replacing its section in --out",
     )
+    ap.add_argument(
+        "--diagnose",
+        action="store_true",
+        help="run the crowd of 10,000 for 100 s with R-ORCA's rules, the weighting and the"
+        " filter taken away one at a time, replacing its section in --out",
+    )
     ap.add_argument("--out", type=Path, default=RESULTS / "liveness.md")
     ap.add_argument(
         "--circular-only",
@@ -264,6 +307,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.circular_only:
         section = circular_section(circular_runs((6, 12, 24, 64)))
         replace_section(args.out, "## Circular swap", [*section, ""], "## Other runs")
+        return 0
+    if args.diagnose:
+        section = diagnosis_section(diagnosis())
+        replace_section(args.out, DIAGNOSIS_HEADING, section, "## Crowd of 1,000, symmetric")
         return 0
     if args.big:
         rows = crowds((10_000,), range(1), BIG_CAP)

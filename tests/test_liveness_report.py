@@ -1,0 +1,60 @@
+"""benchmarks/liveness_report.py: the figures of the crowd of 10,000 that docs/liveness.md
+quotes (the least ratio of the shares at goal, the diagnosis table) computed from the runs'
+arrival series, and the figures written in benchmarks/results/liveness.md consistent with its
+own share table."""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import liveness_report as report  # noqa: E402
+
+
+def _run(shares: np.ndarray) -> dict:
+    return {"arrived": shares, "closest": 1.0}
+
+
+def test_the_least_ratio_is_the_least_over_every_step_from_its_start_orca_held_once_done():
+    steps = 40
+    ours = np.linspace(0.01, 0.5, steps)
+    orca = np.linspace(0.02, 1.0, 30)  # ORCA finishes at step 30: its share held at 1.0 after
+    ours[35] = 0.05  # the dip: 0.05 against ORCA's held 1.0
+    ours[5] = 0.0  # before the start (25 steps of 0.05 s = 1.25 s): not counted
+    rows = [{"n": 10, "seed": 3, "ours": _run(ours), "orca": _run(orca)}]
+    line = report.least_ratio(rows, start=1.25)[0]
+    assert "at least 0.05 times ORCA's" in line
+    assert "the least at 1.80 s: 5.0 % against 100.0 %" in line
+    ours[35] = 0.5
+    line = report.least_ratio(rows, start=1.25)[0]
+    want = min(ours[k] / orca[min(k, 29)] for k in range(24, steps))
+    assert f"at least {want:.2f} times" in line
+
+
+def test_the_diagnosis_rows_read_each_share_at_its_mark_and_divide_by_orcas_at_the_last():
+    marks = report.DIAGNOSIS_MARKS
+    steps = int(round(marks[-1] / report.DT))
+    orca = np.full(steps, 0.5)
+    ours = np.full(steps, 0.1)
+    for t, share in zip(marks, (0.1, 0.2, 0.3, 0.4), strict=True):
+        ours[int(round(t / report.DT)) - 1] = share
+    rows = [{"label": "a", "ours": _run(ours)}, {"label": "ORCA", "ours": _run(orca)}]
+    table = report.diagnosis_section(rows)
+    row = next(line for line in table if line.startswith("| a |"))
+    assert row == "| a | 10.0 % | 20.0 % | 30.0 % | 40.0 % | 0.80 | 1.0000 |"
+
+
+def test_the_written_least_ratio_of_the_crowd_of_10000_agrees_with_its_share_table():
+    text = (ROOT / "benchmarks/results/liveness.md").read_text()
+    section = text[text.index(report.BIG_HEADING) :]
+    least = float(re.search(r"share at goal is at\s+least ([0-9.]+) times", section)[1])
+    cells = re.search(r"\| 10,000 \| 0 \| (.*) \|\n", section)[1].split(" | ")
+    pairs = [[float(x) for x in re.findall(r"([0-9.]+) %", c)] for c in cells]
+    assert len(pairs) == len(report.BIG_MARKS)
+    assert least <= min(a / b for a, b in pairs) + 0.005
