@@ -241,12 +241,12 @@ def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
             f"- {name}: arrived {100 * r['arrived'][-1]:.1f} %, makespan {r['makespan'] or '-'},"
             f" closest pair {r['closest']:.4f} m."
         )
-    # the sections rerun alone (--big, --symmetric-only, --held-out, --learned) and
+    # the sections rerun alone (--big, --diagnose, --symmetric-only, --held-out, --learned) and
     # liveness_models.py's survive a full run
     old = path.read_text() if path.exists() else ""
     path.write_text("\n".join(lines) + "\n")
-    for heading in (BIG_HEADING, SYMMETRIC_HEADING, HELD_OUT_HEADING, LEARNED_HEADING,
-                    MODELS_HEADING):  # fmt: skip
+    for heading in (BIG_HEADING, DIAGNOSIS_HEADING, SYMMETRIC_HEADING, HELD_OUT_HEADING,
+                    LEARNED_HEADING, MODELS_HEADING):  # fmt: skip
         if heading in old:
             start, end = _span(old, heading)
             body = old[start:end].rstrip("\n").split("\n")

@@ -223,11 +223,13 @@ def test_an_agent_held_short_of_a_goal_under_its_body_yields_and_the_crowd_finis
 
 
 @pytest.mark.parametrize("unit", [1e-3, 1.0, 1e3])
-def test_goal_blocked_is_held_agents_with_the_goal_under_their_own_body(unit):
-    """Only held agents count, and only where the goal lies within their own radius, in any
-    unit of length (the boundary included)."""
+def test_goal_blocked_is_held_agents_with_the_goal_within_their_reach(unit):
+    """Only held agents count, and only where the goal lies within ``GOAL_REACH`` of their own
+    radii, in any unit of length (the boundary included)."""
     x = unit * np.array([[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
-    g = unit * np.array([[0.3, 0.4], [0.3, 0.4], [0.0, 0.5000001], [0.0, 0.0], [0.0, 0.5]])
+    edge, inside = 0.5 * rorca.GOAL_REACH, 0.3 * rorca.GOAL_REACH
+    g = unit * np.array([[inside, inside], [inside, inside], [0.0, edge * 1.0000001], [0.0, 0.0],
+                         [0.0, edge]])  # fmt: skip
     r = unit * np.array([0.5, 0.5, 0.5, 0.5, 0.5])
     held = np.array([True, False, True, True, True])
     assert rorca.goal_blocked(x, g, r, held).tolist() == [True, False, False, True, True]

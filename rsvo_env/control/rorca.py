@@ -107,11 +107,11 @@ def goal_blocked(
     positions: NDArray, goals: NDArray, radii: NDArray, held: NDArray[np.bool_]
 ) -> NDArray[np.bool_]:
     """(...,) the agents ``held`` short of a goal within ``GOAL_REACH`` of their own radii
-    (``radii``; at 1, a goal under their own bodies), which R-ORCA treats as parked. A
-    neighbour's body blocks such a goal, and an agent pressing for it pins that neighbour, which
-    may be the very agent that must pass to free the goal (the crowd of 100 at its defaults,
-    seed 3: an egoist 0.15 m short of its goal pinned an altruist between two parked agents for
-    20,000 steps). Parked, it yields, the neighbour passes, and it comes back
+    (``radii``; at 3, a goal up to a body's width beyond the agent's own), which R-ORCA treats
+    as parked. A neighbour's body may block such a goal, and an agent pressing for it pins that
+    neighbour, which may be the very agent that must pass to free the goal (the crowd of 100 at
+    its defaults, seed 3: an egoist 0.15 m short of its goal pinned an altruist between two
+    parked agents for 20,000 steps). Parked, it yields, the neighbour passes, and it comes back
     (``docs/liveness.md``)."""
     shape = np.shape(positions)[:-1]
     rows = lambda a: np.ascontiguousarray(np.broadcast_to(a, shape + (2,)), np.float64)  # noqa: E731

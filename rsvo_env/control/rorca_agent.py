@@ -21,9 +21,9 @@ SIDESTEP = 0.0625
 ARRIVE = 2.0
 HOLD_SECONDS = 0.3
 # an agent held within this many of its radii of its goal (1: the goal under its own body) yields
-# as if parked (rorca.goal_blocked); 2 to 4 measured, quicker crowds of 1,000 but the circular
-# swap's egoists no longer first at every size (docs/liveness.md)
-GOAL_REACH = 1.0
+# as if parked (rorca.goal_blocked): 1 to 4 measured (docs/liveness.md); at 3 the crowds of 1,000
+# come in quickest with every agent home, at 4 one agent is left short
+GOAL_REACH = 3.0
 
 
 @njit(cache=True, inline="always")
