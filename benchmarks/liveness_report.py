@@ -103,6 +103,11 @@ def crowd_table(rows: list) -> list[str]:
     return lines
 
 
+def _at(arrived, t: float) -> float:
+    """The share at goal at ``t`` seconds of a run's series (its last, held, once it ended)."""
+    return arrived[min(int(round(t / DT)) - 1, len(arrived) - 1)]
+
+
 def share_at(rows: list, seconds: tuple[float, ...]) -> list[str]:
     """The share of agents arrived at given times, ours and ORCA's, one line a run."""
     lines = ["| N | seed | " + " | ".join(f"{t:.0f} s, ours / ORCA" for t in seconds) + " |",
@@ -110,11 +115,8 @@ def share_at(rows: list, seconds: tuple[float, ...]) -> list[str]:
     for r in rows:
         cells = []
         for t in seconds:
-            k = int(round(t / DT)) - 1
-            a, b = (r[key]["arrived"] for key in ("ours", "orca"))
-            cells.append(
-                f"{100 * a[min(k, len(a) - 1)]:.1f} % / {100 * b[min(k, len(b) - 1)]:.1f} %"
-            )
+            a, b = (_at(r[key]["arrived"], t) for key in ("ours", "orca"))
+            cells.append(f"{100 * a:.1f} % / {100 * b:.1f} %")
         lines.append(f"| {r['n']:,} | {r['seed']} | " + " | ".join(cells) + " |")
     return lines
 
@@ -139,9 +141,7 @@ def least_ratio(rows: list, start: float = 25.0) -> list[str]:
 def diagnosis_section(rows: list) -> list[str]:
     """The crowd of 10,000 for 100 s with R-ORCA's rules, the weighting and the filter taken
     away one at a time (``liveness.diagnosis``), the last row ORCA's."""
-    last = int(round(DIAGNOSIS_MARKS[-1] / DT)) - 1
-    orca = np.asarray(rows[-1]["ours"]["arrived"])
-    orca_last = orca[min(last, len(orca) - 1)]
+    orca_last = _at(rows[-1]["ours"]["arrived"], DIAGNOSIS_MARKS[-1])
     lines = [
         DIAGNOSIS_HEADING,
         "",
@@ -156,8 +156,7 @@ def diagnosis_section(rows: list) -> list[str]:
         "|---|" + "---|" * (len(DIAGNOSIS_MARKS) + 2),
     ]
     for r in rows:
-        a = np.asarray(r["ours"]["arrived"])
-        at = [a[min(int(round(t / DT)) - 1, len(a) - 1)] for t in DIAGNOSIS_MARKS]
+        at = [_at(r["ours"]["arrived"], t) for t in DIAGNOSIS_MARKS]
         ratio = at[-1] / orca_last
         lines.append(f"| {r['label']} | " + " | ".join(f"{100 * x:.1f} %" for x in at)
                      + f" | {ratio:.2f} | {r['ours']['closest']:.4f} |")  # fmt: skip

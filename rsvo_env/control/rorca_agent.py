@@ -141,6 +141,13 @@ def blocked(x, goal, radius, held):
 
 
 @njit(cache=True, inline="always")
+def counts_parked(tied, parked, x, goal, radius, held):
+    """Whether R-ORCA's parked rule (on where ``tied``) treats an agent as parked: ``parked`` on
+    its goal, or held short of a goal within its reach (:func:`blocked`)."""
+    return tied and (parked or blocked(x, goal, radius, held))
+
+
+@njit(cache=True, inline="always")
 def cap_scale(wanted, speed, dist, tau, gap):
     """The factor of an agent's preferred velocity: ``ARRIVE dist / (tau speed)`` where the
     look-ahead ``speed tau`` passes the goal by more than the ``gap``, else 1."""

@@ -15,9 +15,9 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from rsvo_env.control.rorca_agent import (
-    blocked,
     cap_scale,
     cap_wanted,
+    counts_parked,
     goal_gap,
     plane,
     scratch,
@@ -59,7 +59,7 @@ def _caps(lo, hi, n, motion, rules, tau, cut, pref, park):
     cut2 = within(cut)
     for a in range(lo, hi):
         xa, ga, pa = (x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), (pref0[a, 0], pref0[a, 1])
-        park[a] = tied and (parked[a] or blocked(xa, ga, r[a], held[a]))
+        park[a] = counts_parked(tied, parked[a], xa, ga, r[a], held[a])
         wanted, speed, dist = cap_wanted(pa, xa, ga, held[a], tau)
         gap = np.inf
         if wanted:

@@ -19,9 +19,9 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from rsvo_env.control.rorca_agent import (
-    blocked,
     cap_scale,
     cap_wanted,
+    counts_parked,
     goal_gap,
     plane,
     scratch,
@@ -65,9 +65,8 @@ def _index(x, n, cut):
 @njit(cache=True)
 def _gather(perm, motion, theta, parked, held, tied):
     """The agents' data in cell order (copies), the order both passes visit and read them in:
-    (x, v, goals, preferred, radii, theta, parked, held), an agent held short of a goal under
-    its own body (within ``GOAL_REACH`` radii, ``rorca.goal_blocked``) parked too where the
-    parked rule is on (``tied``)."""
+    (x, v, goals, preferred, radii, theta, parked, held), who counts as parked by
+    ``rorca_agent.counts_parked``."""
     x, v, g, pref0, r = motion
     M = perm.shape[0]
     xs, vs, gs, ps = np.empty((M, 2)), np.empty((M, 2)), np.empty((M, 2)), np.empty((M, 2))
@@ -78,8 +77,8 @@ def _gather(perm, motion, theta, parked, held, tied):
         xs[s, 0], xs[s, 1], vs[s, 0], vs[s, 1] = x[a, 0], x[a, 1], v[a, 0], v[a, 1]
         gs[s, 0], gs[s, 1], ps[s, 0], ps[s, 1] = g[a, 0], g[a, 1], pref0[a, 0], pref0[a, 1]
         rs[s], ths[s], holds[s] = r[a], theta[a], held[a]
-        held_short = blocked((x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a], held[a])
-        parks[s] = tied and (parked[a] or held_short)
+        parks[s] = counts_parked(tied, parked[a], (x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a],
+                                 held[a])  # fmt: skip
     return xs, vs, gs, ps, rs, ths, parks, holds
 
 
