@@ -128,6 +128,8 @@ def test_filter_box_bounds_per_component_are_kept():
         ("ramp_merge", {"v0": -1.0}, "v0"),
         ("ramp_merge", {"finish_y": -1.0}, "finish_y"),
         ("crowd", {"rh_trigger_factor": -1.0}, "rh_trigger_factor"),
+        ("crowd", {"rorca_goal_reach": -0.5}, "rorca_goal_reach"),
+        ("crowd", {"rorca_goal_reach": float("inf")}, "rorca_goal_reach"),
         ("circular_swap", {"rh_trigger": -1.0}, "rh_trigger"),
         ("circular_swap", {"circle_radius": 0.0}, "circle_radius"),
         ("crowd", {"side_factor": -2.0}, "side_factor"),

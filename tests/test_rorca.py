@@ -222,17 +222,17 @@ def test_an_agent_held_short_of_a_goal_under_its_body_yields_and_the_crowd_finis
     assert reached.all(), f"agents {np.nonzero(~reached)[0].tolist()} never reached their goals"
 
 
-@pytest.mark.parametrize("unit", [1e-3, 1.0, 1e3])
-def test_goal_blocked_is_held_agents_with_the_goal_within_their_reach(unit):
-    """Only held agents count, and only where the goal lies within ``GOAL_REACH`` of their own
+@pytest.mark.parametrize("unit,reach", [(1e-3, 1.0), (1.0, rorca.GOAL_REACH), (1e3, 4.5)])
+def test_goal_blocked_is_held_agents_with_the_goal_within_their_reach(unit, reach):
+    """Only held agents count, and only where the goal lies within ``reach`` of their own
     radii, in any unit of length (the boundary included)."""
     x = unit * np.array([[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
-    edge, inside = 0.5 * rorca.GOAL_REACH, 0.3 * rorca.GOAL_REACH
+    edge, inside = 0.5 * reach, 0.3 * reach
     g = unit * np.array([[inside, inside], [inside, inside], [0.0, edge * 1.0000001], [0.0, 0.0],
                          [0.0, edge]])  # fmt: skip
     r = unit * np.array([0.5, 0.5, 0.5, 0.5, 0.5])
     held = np.array([True, False, True, True, True])
-    assert rorca.goal_blocked(x, g, r, held).tolist() == [True, False, False, True, True]
+    assert rorca.goal_blocked(x, g, r, held, reach).tolist() == [True, False, False, True, True]
 
 
 def test_move_to_goal_is_kept_by_name_and_the_ramp_merge_keeps_its_lane_follower():
@@ -328,7 +328,8 @@ def test_paired_theta_names_a_bad_count(bad):
         paired_theta(bad)
 
 
-def reference_velocities(x, v, pref, radii, theta, u_max, dt, tau, parked, goals, held, K):
+def reference_velocities(x, v, pref, radii, theta, u_max, dt, tau, parked, goals, held, K,
+                         reach=rorca.GOAL_REACH):  # fmt: skip
     """R-ORCA assembled from its parts as it was before it became one compiled stage: every
     pair's half-planes (``_half_planes``), ORCA's nearest-K rule by a lexsort, the disk's solve
     agent by agent, the sidestep re-solve, the speed clip. One env (N agents);
@@ -337,8 +338,8 @@ def reference_velocities(x, v, pref, radii, theta, u_max, dt, tau, parked, goals
     from rsvo_env.qp import disk
 
     n = len(x)
-    # an agent held short of a goal under its own body counts as parked
-    parked = parked | (held & (np.hypot(*(goals - x).T) <= rorca.GOAL_REACH * radii))
+    # an agent held short of a goal within the goal rule's reach counts as parked
+    parked = parked | (held & (np.hypot(*(goals - x).T) <= reach * radii))
     I, J = pairs.candidate_pairs(x[None], 10.0 * float(radii.max()))
     w = pairs.weights_of(theta[None], ["asymmetric"], I, J)
     s = 1.0 - w[:, 0]
@@ -385,12 +386,12 @@ def test_the_compiled_stage_equals_r_orca_assembled_from_its_parts(n, seed, K, l
     goals = x + rng.uniform(-1.5, 1.5, (n, 2))
     radii = rng.uniform(0.3, 0.6, n)
     theta = rng.uniform(1, 10, n)
-    parked, held = rng.random(n) < 0.2, rng.random(n) < 0.5
+    parked, held, reach = rng.random(n) < 0.2, rng.random(n) < 0.5, (0.0, 1.0, 3.0)[seed % 3]
     expected = reference_velocities(x, v, pref, radii, theta, 2.0, 0.05, 2.0, parked, goals,
-                                    held, K)  # fmt: skip
+                                    held, K, reach)  # fmt: skip
     got = rorca.rorca_velocities(
         x[None], v[None], pref[None], radii, theta[None], ["asymmetric"], 2.0, 0.05, 2.0,
-        max_neighbors=K, rules=rorca.Rules(parked[None], goals[None], held[None]),
+        max_neighbors=K, rules=rorca.Rules(parked[None], goals[None], held[None], reach=reach),
     )[0]  # fmt: skip
     assert np.array_equal(got, expected)
 

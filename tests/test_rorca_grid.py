@@ -10,11 +10,14 @@ from rsvo_env.control import rorca
 
 
 @settings(deadline=None, max_examples=10)
-@given(st.integers(65, 150), st.integers(0, 2**32 - 1), st.sampled_from([1e-3, 1.0, 1e4]))
-def test_the_grid_stage_equals_the_assembly_in_clusters_far_apart_and_at_any_scale(n, seed, unit):
+@given(st.integers(65, 150), st.integers(0, 2**32 - 1), st.sampled_from([1e-3, 1.0, 1e4]),
+       st.sampled_from([0.0, 1.0, 3.0]))  # fmt: skip
+def test_the_grid_stage_equals_the_assembly_in_clusters_far_apart_and_at_any_scale(
+    n, seed, unit, reach
+):
     """The grid stage's cells coarsen over a crowd whose bounding box is mostly empty (two
     clusters and a lone agent far apart, some agents on one point): the same velocities as the
-    pair-by-pair assembly, bit for bit, in any units."""
+    pair-by-pair assembly, bit for bit, in any units, at any reach of the goal rule."""
     rng = np.random.default_rng(seed)
     x = rng.uniform(0, 1.2 * np.sqrt(n // 2), (n, 2))
     x[n // 2 :] += 1e4
@@ -27,9 +30,9 @@ def test_the_grid_stage_equals_the_assembly_in_clusters_far_apart_and_at_any_sca
     theta = rng.uniform(1, 10, n)
     parked, held = rng.random(n) < 0.2, rng.random(n) < 0.5
     expected = reference_velocities(x, v, pref, radii, theta, 2.0 * unit, 0.05, 2.0, parked,
-                                    goals, held, 10)  # fmt: skip
+                                    goals, held, 10, reach)  # fmt: skip
     got = rorca.rorca_velocities(
         x[None], v[None], pref[None], radii, theta[None], ["asymmetric"], 2.0 * unit, 0.05, 2.0,
-        rules=rorca.Rules(parked[None], goals[None], held[None]),
+        rules=rorca.Rules(parked[None], goals[None], held[None], reach=reach),
     )[0]  # fmt: skip
     assert np.array_equal(got, expected)

@@ -104,41 +104,44 @@ def _cap_pairs(x, g, pref, r, I, J, tau, held, out):
 
 
 def goal_blocked(
-    positions: NDArray, goals: NDArray, radii: NDArray, held: NDArray[np.bool_]
-) -> NDArray[np.bool_]:
-    """(...,) the agents ``held`` short of a goal within ``GOAL_REACH`` of their own radii
-    (``radii``; at 3, a goal up to a body's width beyond the agent's own), which R-ORCA treats
-    as parked. A neighbour's body may block such a goal, and an agent pressing for it pins that
-    neighbour, which may be the very agent that must pass to free the goal (the crowd of 100 at
-    its defaults, seed 3: an egoist 0.15 m short of its goal pinned an altruist between two
-    parked agents for 20,000 steps). Parked, it yields, the neighbour passes, and it comes back
-    (``docs/liveness.md``)."""
+    positions: NDArray, goals: NDArray, radii: NDArray, held: NDArray[np.bool_],
+    reach: float = GOAL_REACH,
+) -> NDArray[np.bool_]:  # fmt: skip
+    """(...,) the agents ``held`` short of a goal within ``reach`` of their own radii
+    (``radii``; at 3, a goal up to a body's width beyond the agent's own; at 0, none), which
+    R-ORCA treats as parked. A neighbour's body may block such a goal, and an agent pressing
+    for it pins that neighbour, which may be the very agent that must pass to free the goal
+    (the crowd of 100 at its defaults, seed 3: an egoist 0.15 m short of its goal pinned an
+    altruist between two parked agents for 20,000 steps). Parked, it yields, the neighbour
+    passes, and it comes back (``docs/liveness.md``)."""
     shape = np.shape(positions)[:-1]
     rows = lambda a: np.ascontiguousarray(np.broadcast_to(a, shape + (2,)), np.float64)  # noqa: E731
     each = lambda a, t: np.ascontiguousarray(np.broadcast_to(a, shape), t).reshape(-1)  # noqa: E731
     out = np.empty(int(np.prod(shape)), np.bool_)
     _blocked_all(rows(positions).reshape(-1, 2), rows(goals).reshape(-1, 2),
-                 each(radii, np.float64), each(held, np.bool_), out)  # fmt: skip
+                 each(radii, np.float64), each(held, np.bool_), float(reach), out)  # fmt: skip
     return out.reshape(shape)
 
 
 @njit(cache=True)
-def _blocked_all(x, g, r, held, out):
+def _blocked_all(x, g, r, held, reach, out):
     """:func:`goal_blocked` over flat rows, by the stages' own rule (``rorca_agent.blocked``)."""
     for a in range(x.shape[0]):
-        out[a] = blocked((x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a], held[a])
+        out[a] = blocked((x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a], held[a], reach)
 
 
 class Rules(NamedTuple):
     """The state R-ORCA reads beyond the crowd's motion and scores: its rules' ``parked``
     (E, N) agents at their goals, ``goals`` (E, N, 2), ``held`` (E, N) agents held short of
-    them; and ``omega`` (E, N, N), the weight matrices of the scores where the caller keeps them
-    (the simulation core does, ``State.omega``), read rather than computed again."""
+    them; ``omega`` (E, N, N), the weight matrices of the scores where the caller keeps them
+    (the simulation core does, ``State.omega``), read rather than computed again; and the goal
+    rule's ``reach`` (:func:`goal_blocked`)."""
 
     parked: NDArray | None = None
     goals: NDArray | None = None
     held: NDArray | None = None
     omega: NDArray | None = None
+    reach: float = GOAL_REACH
 
 
 def rorca_velocities(
@@ -162,13 +165,13 @@ def rorca_velocities(
     (E, N) or (N,); the weights come from the scores ``theta`` (E, N) and each env's weighting
     ``modes`` (``"symmetric"``: ORCA); ``parked`` (E, N): agents at their goals, which take all
     of the avoidance and none of the slack from agents en route, read at their preferred
-    velocities, and so do the agents held short of goals under their own bodies
+    velocities, and so do the agents held short of goals within the goal rule's ``reach``
     (:func:`goal_blocked`); ``goals`` (E, N, 2): near its goal, where its look-ahead reaches a
     neighbour, an agent's preferred speed is capped (:func:`arrival_capped`), only the agents
-    ``held`` (E, N) if given; these three are ``rules`` (:class:`Rules`, None: none of them),
-    and so are the weight matrices ``omega`` (E, N, N) of ``theta`` and ``modes`` where the caller
-    keeps them (read, not computed again)."""
-    parked, goals, held, omega = (None, None, None, None) if rules is None else rules
+    ``held`` (E, N) if given; these three and the ``reach`` are ``rules`` (:class:`Rules`, None:
+    none of them), and so are the weight matrices ``omega`` (E, N, N) of ``theta`` and ``modes``
+    where the caller keeps them (read, not computed again)."""
+    parked, goals, held, omega, reach = Rules() if rules is None else rules
     E, n = positions.shape[:2]
     M = E * n
     flat = lambda a: np.ascontiguousarray(a, dtype=np.float64).reshape(M, -1)  # noqa: E731
@@ -189,7 +192,7 @@ def rorca_velocities(
     motion, tied = (x, v, g, pref0, r), parked is not None
     settings = (K, float(u_max), float(tau), float(dt), float(neighbor_dist))
     flags = np.zeros(M, np.bool_) if parked is None else np.ascontiguousarray(parked, np.bool_)
-    rules = (flags.reshape(M), hold, tied)
+    rules = (flags.reshape(M), hold, tied, float(reach))
     if n > sizes.DENSE_MAX_AGENTS:  # a grid scan for each agent's K nearest, ORCA's way
         if omega is None and any(callable(m) for m in modes):
             omega = rorca_dense.matrices(theta, modes)

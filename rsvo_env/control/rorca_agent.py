@@ -20,9 +20,10 @@ SIDESTEP = 0.0625
 # goal for good; an agent still closing in keeps its speed (docs/liveness.md)
 ARRIVE = 2.0
 HOLD_SECONDS = 0.3
-# an agent held within this many of its radii of its goal (1: the goal under its own body) yields
-# as if parked (rorca.goal_blocked): 1 to 4 measured (docs/liveness.md); at 3 the crowds of 1,000
-# come in quickest with every agent home, at 4 one agent is left short
+# the default reach of the goal rule (a scenario's ``rorca_goal_reach``): an agent held within
+# this many of its radii of its goal (1: the goal under its own body) yields as if parked
+# (rorca.goal_blocked): 1 to 4 measured (docs/liveness.md); at 3 the crowds of 1,000 come in
+# quickest with every agent home, at 4 one agent is left short; 0 turns the rule off
 GOAL_REACH = 3.0
 
 
@@ -133,18 +134,18 @@ def goal_gap(goal, other, r_me, r_other):
 
 
 @njit(cache=True, inline="always")
-def blocked(x, goal, radius, held):
-    """Whether an agent ``held`` short of its goal has it within ``GOAL_REACH`` of its own
+def blocked(x, goal, radius, held, reach):
+    """Whether an agent ``held`` short of its goal has it within ``reach`` of its own
     ``radius`` (``rorca.goal_blocked``, the same arithmetic): then it yields as if parked."""
     dx, dy = goal[0] - x[0], goal[1] - x[1]
-    return held and np.sqrt(dx * dx + dy * dy) <= GOAL_REACH * radius
+    return held and np.sqrt(dx * dx + dy * dy) <= reach * radius
 
 
 @njit(cache=True, inline="always")
-def counts_parked(tied, parked, x, goal, radius, held):
+def counts_parked(tied, parked, x, goal, radius, held, reach):
     """Whether R-ORCA's parked rule (on where ``tied``) treats an agent as parked: ``parked`` on
-    its goal, or held short of a goal within its reach (:func:`blocked`)."""
-    return tied and (parked or blocked(x, goal, radius, held))
+    its goal, or held short of a goal within its ``reach`` (:func:`blocked`)."""
+    return tied and (parked or blocked(x, goal, radius, held, reach))
 
 
 @njit(cache=True, inline="always")

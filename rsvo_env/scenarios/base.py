@@ -44,6 +44,9 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "nominal": "move_to_goal",
     "rorca_tau": 2.0,
     "rorca_pad": 1.05,
+    # R-ORCA's goal rule: an agent held within this many of its (padded) radii of its goal
+    # yields as if parked; 0 turns the rule off
+    "rorca_goal_reach": rorca.GOAL_REACH,
 }
 DEADLOCK_RESOLUTIONS = ("right_hand", "none")
 NOMINALS = ("move_to_goal", "rorca")
@@ -72,7 +75,8 @@ class Scenario:
     # parameters that must be > 0 and >= 0 (each subclass adds its own)
     positive: ClassVar[tuple[str, ...]] = ("dt", "goal_tolerance", "safety_radius", "gamma", "k",
                                            "theta_max", "u_max")  # fmt: skip
-    nonnegative: ClassVar[tuple[str, ...]] = ("rh_trigger", "rh_trigger_factor")
+    nonnegative: ClassVar[tuple[str, ...]] = ("rh_trigger", "rh_trigger_factor",
+                                              "rorca_goal_reach")
 
     def __init__(self, **kwargs: Any) -> None:
         self.choose_model(kwargs)
@@ -317,7 +321,7 @@ class Scenario:
             rules=rorca.Rules(
                 parked=state.at_goal, goals=state.goals,
                 held=stall.held(state.no_progress, p["dt"], rorca.HOLD_SECONDS),
-                omega=state.omega,
+                omega=state.omega, reach=p["rorca_goal_reach"],
             ),
         )  # fmt: skip
 
