@@ -57,8 +57,10 @@ ROTATIONS = 10  # circular swaps, each turned by a random angle
 # what holds the crowd of 10,000 back against ORCA (issue 45): the parts taken away one at a time
 NO_TURN = {"deadlock_resolution": "none"}
 NO_SPLIT = {**NO_TURN, "weighting": "symmetric"}
+BARE = {**NO_SPLIT, "rorca_pad": 1.0, "rorca_goal_reach": 0.0}  # ORCA behind the filter
 DIAGNOSIS = (
     ("R-ORCA behind the filter (the crowd table's setting)", {}),
+    ("the goal rule off (`rorca_goal_reach = 0`)", {"rorca_goal_reach": 0.0}),
     ("the right-hand turn at 15 degrees, not 30", {"rh_angle_deg": 15.0}),
     ("the right-hand rule only within 1.25 R, not 1.5 R", {"rh_trigger_factor": 1.25}),
     ("R-ORCA's horizon 1 s, not 2 s", {"rorca_tau": 1.0}),
@@ -72,7 +74,12 @@ DIAGNOSIS = (
                                                         "safety_filter": False}),
     ("no right-hand rule, the symmetric weighting, `rorca_pad = 1`, no filter",
      {**NO_SPLIT, "rorca_pad": 1.0, "safety_filter": False}),
+    ("no right-hand rule, the symmetric weighting, `rorca_pad = 1`, the goal rule off", BARE),
+    ("no right-hand rule, the symmetric weighting, `rorca_pad = 1`, the goal rule off, no"
+     " filter", {**BARE, "safety_filter": False}),
 )  # fmt: skip
+# run on to 450 s: without R-ORCA's rules and the R-SVO split, does the filtered crowd finish?
+DIAGNOSIS_LONG = (DIAGNOSIS[-2],)
 
 
 def ours(n: int, seed: int, cap: int, scenario: str = "crowd", **kw) -> dict:
@@ -131,14 +138,17 @@ def _makespan(arrived: list[int], n: int) -> int | None:
     return len(arrived) if arrived and arrived[-1] == n else None
 
 
-def diagnosis(n: int = 10_000, seed: int = 0, cap: int = DIAGNOSIS_CAP) -> list[dict]:
-    """The crowd of ``n`` under each configuration of ``DIAGNOSIS`` (R-ORCA's rules, the
-    weighting, the filter taken away one at a time), and ORCA on the same starts and goals."""
+def diagnosis(configs=DIAGNOSIS, n: int = 10_000, seed: int = 0, cap: int = DIAGNOSIS_CAP,
+              with_orca: bool = True) -> list[dict]:  # fmt: skip
+    """The crowd of ``n`` under each of ``configs`` (R-ORCA's rules, the weighting, the filter
+    taken away one at a time), and ORCA on the same starts and goals."""
     rows = []
-    for label, kw in DIAGNOSIS:
+    for label, kw in configs:
         r = ours(n, seed, cap, **{"theta_range": (1.0, 10.0), "gamma": GAMMA, **kw})
         rows.append({"label": label, "ours": r})
         print("diagnosis", label, r["arrived"][-1], r["closest"], flush=True)
+    if not with_orca:
+        return rows
     return [*rows, {"label": "ORCA (pyrvo)", "ours": orca(*rows[0]["ours"]["start"], cap)}]
 
 
@@ -309,7 +319,8 @@ def main(argv: list[str] | None = None) -> int:
         replace_section(args.out, "## Circular swap", [*section, ""], "## Other runs")
         return 0
     if args.diagnose:
-        section = diagnosis_section(diagnosis())
+        long = diagnosis(DIAGNOSIS_LONG, cap=BIG_CAP, with_orca=False)
+        section = diagnosis_section(diagnosis(), long)
         replace_section(args.out, DIAGNOSIS_HEADING, section, "## Crowd of 1,000, symmetric")
         return 0
     if args.big:

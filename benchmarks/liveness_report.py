@@ -121,27 +121,38 @@ def share_at(rows: list, seconds: tuple[float, ...]) -> list[str]:
     return lines
 
 
+def _least(ours, orca, start: float) -> tuple[float, int, float]:
+    """(ratio, step, ORCA's share there): the least ratio of two arrival series, ``ours`` over
+    ``orca``, at any step from ``start`` seconds to the end of ``ours`` (ORCA's share held once
+    it has finished)."""
+    a, b = np.asarray(ours), np.asarray(orca)
+    steps = np.arange(int(round(start / DT)) - 1, len(a))
+    theirs = b[np.minimum(steps, len(b) - 1)]
+    k = int(np.argmin(a[steps] / theirs))
+    return float(a[steps[k]] / theirs[k]), int(steps[k]), float(theirs[k])
+
+
 def least_ratio(rows: list, start: float = 25.0) -> list[str]:
     """Per run, the least ratio of the shares at goal, ours over ORCA's, at any step from
     ``start`` seconds on (ORCA's share held once it has finished)."""
     lines = []
     for r in rows:
-        a, b = (np.asarray(r[key]["arrived"]) for key in ("ours", "orca"))
-        steps = np.arange(int(round(start / DT)) - 1, len(a))
-        ratio = a[steps] / b[np.minimum(steps, len(b) - 1)]
-        k = int(np.argmin(ratio))
+        a = r["ours"]["arrived"]
+        ratio, k, theirs = _least(a, r["orca"]["arrived"], start)
         lines.append(
             f"- N = {r['n']:,}, seed {r['seed']}: from {start:.0f} s on, the share at goal is at"
-            f" least {ratio[k]:.2f} times ORCA's (the least at {(steps[k] + 1) * DT:.2f} s:"
-            f" {100 * a[steps[k]]:.1f} % against {100 * b[min(steps[k], len(b) - 1)]:.1f} %)"
+            f" least {ratio:.2f} times ORCA's (the least at {(k + 1) * DT:.2f} s:"
+            f" {100 * a[k]:.1f} % against {100 * theirs:.1f} %)"
         )
     return lines
 
 
-def diagnosis_section(rows: list) -> list[str]:
+def diagnosis_section(rows: list, long: list = (), start: float = 25.0) -> list[str]:
     """The crowd of 10,000 for 100 s with R-ORCA's rules, the weighting and the filter taken
-    away one at a time (``liveness.diagnosis``), the last row ORCA's."""
-    orca_last = _at(rows[-1]["ours"]["arrived"], DIAGNOSIS_MARKS[-1])
+    away one at a time (``liveness.diagnosis``), the last row ORCA's; each row's least ratio
+    to ORCA's share from ``start`` seconds on; the ``long`` rows run to 450 s."""
+    orca = rows[-1]["ours"]["arrived"]
+    orca_last = _at(orca, DIAGNOSIS_MARKS[-1])
     lines = [
         DIAGNOSIS_HEADING,
         "",
@@ -152,14 +163,29 @@ def diagnosis_section(rows: list) -> list[str]:
         " apart (the closest pair).",
         "",
         "| configuration | " + " | ".join(f"at goal, {t:.0f} s" for t in DIAGNOSIS_MARKS)
-        + f" | {DIAGNOSIS_MARKS[-1]:.0f} s, over ORCA's | closest pair [m] |",
-        "|---|" + "---|" * (len(DIAGNOSIS_MARKS) + 2),
+        + f" | {DIAGNOSIS_MARKS[-1]:.0f} s, over ORCA's | least over ORCA's from {start:.0f} s"
+        " (at) | closest pair [m] |",
+        "|---|" + "---|" * (len(DIAGNOSIS_MARKS) + 3),
     ]
     for r in rows:
         at = [_at(r["ours"]["arrived"], t) for t in DIAGNOSIS_MARKS]
-        ratio = at[-1] / orca_last
+        least, k, _ = _least(r["ours"]["arrived"], orca, start)
         lines.append(f"| {r['label']} | " + " | ".join(f"{100 * x:.1f} %" for x in at)
-                     + f" | {ratio:.2f} | {r['ours']['closest']:.4f} |")  # fmt: skip
+                     + f" | {at[-1] / orca_last:.2f} | {least:.2f} ({(k + 1) * DT:.2f} s) |"
+                     f" {r['ours']['closest']:.4f} |")  # fmt: skip
+    if long:
+        lines += [
+            "",
+            f"Run on to {BIG_CAP * DT:.0f} s (the crowd table's setting is the section above):",
+            "",
+            "| configuration | " + " | ".join(f"at goal, {t:.0f} s" for t in BIG_MARKS)
+            + " | closest pair [m] |",
+            "|---|" + "---|" * (len(BIG_MARKS) + 1),
+        ]
+        for r in long:
+            at = [_at(r["ours"]["arrived"], t) for t in BIG_MARKS]
+            lines.append(f"| {r['label']} | " + " | ".join(f"{100 * x:.1f} %" for x in at)
+                         + f" | {r['ours']['closest']:.4f} |")  # fmt: skip
     return [*lines, ""]
 
 

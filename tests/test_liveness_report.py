@@ -44,10 +44,16 @@ def test_the_diagnosis_rows_read_each_share_at_its_mark_and_divide_by_orcas_at_t
     ours = np.full(steps, 0.1)
     for t, share in zip(marks, (0.1, 0.2, 0.3, 0.4), strict=True):
         ours[int(round(t / report.DT)) - 1] = share
+    ours[200] = 0.01  # before 25 s: not counted in the least ratio
+    ours[1500] = 0.04  # the dip, at 75.05 s
     rows = [{"label": "a", "ours": _run(ours)}, {"label": "ORCA", "ours": _run(orca)}]
-    table = report.diagnosis_section(rows)
+    long = [{"label": "b", "ours": _run(np.linspace(0.0, 1.0, report.BIG_CAP))}]
+    table = report.diagnosis_section(rows, long)
     row = next(line for line in table if line.startswith("| a |"))
-    assert row == "| a | 10.0 % | 20.0 % | 30.0 % | 40.0 % | 0.80 | 1.0000 |"
+    assert row == "| a | 10.0 % | 20.0 % | 30.0 % | 40.0 % | 0.80 | 0.08 (75.05 s) | 1.0000 |"
+    row = next(line for line in table if line.startswith("| b |"))
+    want = [100 * (round(t / report.DT) - 1) / (report.BIG_CAP - 1) for t in report.BIG_MARKS]
+    assert row == "| b | " + " | ".join(f"{x:.1f} %" for x in want) + " | 1.0000 |"
 
 
 def test_the_written_least_ratio_of_the_crowd_of_10000_agrees_with_its_share_table():
