@@ -50,9 +50,7 @@ def _caps(lo, hi, n, motion, rules, tau, cut, pref, park):
     """Agents lo..hi's preferred velocities with the arrival cap into ``pref``
     (``rorca.arrival_capped``), their neighbours within ``cut`` scanned only where the cap can
     apply, and whether each counts as parked into ``park``: ``rules`` (parked, held, tied,
-    reach), an
-    agent held short of a goal within its reach (``rorca.goal_blocked``) parked too where the
-    parked rule is on (``tied``).
+    reach), who counts as parked by ``rorca_agent.counts_parked``.
     Every pass is a function called once a block, its helpers given scalars: an array handed to
     an inlined helper costs two atomic reference counts, as much as an agent's arithmetic."""
     x, g, pref0, r = motion[0], motion[2], motion[3], motion[4]
