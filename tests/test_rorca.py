@@ -5,6 +5,7 @@ unchanged filter crowds finish with no collision."""
 
 import numpy as np
 import pytest
+from crowd_runs import run_to_goals
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -148,13 +149,7 @@ def test_a_crowd_of_100_finishes_behind_the_filter_with_no_collision(seed):
     env = BatchedEnv("crowd", num_envs=1, safety_filter=True, num_agents=100, max_steps=3000,
                      dt=0.05, gamma=20.0, theta_range=(1.0, 10.0))  # fmt: skip
     env.reset(seed=seed)
-    reached = np.zeros(100, dtype=bool)
-    for _ in range(3000):
-        _, _, term, trunc, info = env.step(env.nominal_actions())
-        assert info["min_distance"].min() >= 1.0 - 1e-9
-        reached |= info["at_goal"][0]
-        if reached.all() or term.any() or trunc.any():
-            break
+    reached = run_to_goals(env, 3000)
     assert reached.all(), f"{int((~reached).sum())} agents never reached their goals"
 
 

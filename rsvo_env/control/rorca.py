@@ -135,13 +135,15 @@ class Rules(NamedTuple):
     (E, N) agents at their goals, ``goals`` (E, N, 2), ``held`` (E, N) agents held short of
     them; ``omega`` (E, N, N), the weight matrices of the scores where the caller keeps them
     (the simulation core does, ``State.omega``), read rather than computed again; and the goal
-    rule's ``reach`` (:func:`goal_blocked`)."""
+    rule's ``reach`` (:func:`goal_blocked`) and ``goal_held`` (E, N), the agents held long
+    enough for it (None: ``held``)."""
 
     parked: NDArray | None = None
     goals: NDArray | None = None
     held: NDArray | None = None
     omega: NDArray | None = None
     reach: float = GOAL_REACH
+    goal_held: NDArray | None = None
 
 
 def rorca_velocities(
@@ -168,10 +170,10 @@ def rorca_velocities(
     velocities, and so do the agents held short of goals within the goal rule's ``reach``
     (:func:`goal_blocked`); ``goals`` (E, N, 2): near its goal, where its look-ahead reaches a
     neighbour, an agent's preferred speed is capped (:func:`arrival_capped`), only the agents
-    ``held`` (E, N) if given; these three and the ``reach`` are ``rules`` (:class:`Rules`, None:
-    none of them), and so are the weight matrices ``omega`` (E, N, N) of ``theta`` and ``modes``
-    where the caller keeps them (read, not computed again)."""
-    parked, goals, held, omega, reach = Rules() if rules is None else rules
+    ``held`` (E, N) if given; these three, the ``reach`` and ``goal_held`` are ``rules``
+    (:class:`Rules`, None: none of them), and so are the weight matrices ``omega`` (E, N, N)
+    of ``theta`` and ``modes`` where the caller keeps them (read, not computed again)."""
+    parked, goals, held, omega, reach, goal_held = Rules() if rules is None else rules
     E, n = positions.shape[:2]
     M = E * n
     flat = lambda a: np.ascontiguousarray(a, dtype=np.float64).reshape(M, -1)  # noqa: E731
@@ -192,7 +194,13 @@ def rorca_velocities(
     motion, tied = (x, v, g, pref0, r), parked is not None
     settings = (K, float(u_max), float(tau), float(dt), float(neighbor_dist))
     flags = np.zeros(M, np.bool_) if parked is None else np.ascontiguousarray(parked, np.bool_)
-    rules = (flags.reshape(M), hold, tied, float(reach))
+    flags = flags.reshape(M)
+    if tied and goals is not None and goal_held is not None:
+        # the goal rule on its own clock: the agents it holds count as parked, as the stages
+        # would count them (counts_parked), and the stages' own reach is off
+        flags = flags | goal_blocked(x, g, r, np.reshape(goal_held, M), reach)
+        reach = 0.0
+    rules = (flags, hold, tied, float(reach))
     if n > sizes.DENSE_MAX_AGENTS:  # a grid scan for each agent's K nearest, ORCA's way
         if omega is None and any(callable(m) for m in modes):
             omega = rorca_dense.matrices(theta, modes)

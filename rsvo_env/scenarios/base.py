@@ -18,7 +18,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env import dynamics
-from rsvo_env.control import nominal, rorca, stall
+from rsvo_env.control import nominal, rorca, scripted_rorca, stall
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.util.planar import within
@@ -35,6 +35,9 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "dt": 0.01,
     "goal_tolerance": 0.05,
     "deadlock_resolution": "right_hand",
+    # the right-hand rule turns only agents that have come no closer to their goals for this
+    # long (s; the stall clock, rsvo_env.control.stall): 0, every agent it fires for
+    "rh_hold": 0.0,
     "theta": None,
     "theta_max": 1000.0,
     # (low, high): each episode draws every agent's theta uniformly from it (env's generator)
@@ -44,9 +47,12 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "nominal": "move_to_goal",
     "rorca_tau": 2.0,
     "rorca_pad": 1.05,
-    # R-ORCA's goal rule: an agent held within this many of its (padded) radii of its goal
-    # yields as if parked; 0 turns the rule off
+    # R-ORCA's goal rule: an agent held this long (s) within this many of its (padded) radii
+    # of its goal yields as if parked; a reach of 0 turns the rule off
     "rorca_goal_reach": rorca.GOAL_REACH,
+    "rorca_goal_hold": rorca.HOLD_SECONDS,
+    # R-ORCA's preferred velocity turned around the knots ahead (rsvo_env.control.rorca_route)
+    "rorca_route": False,
 }
 DEADLOCK_RESOLUTIONS = ("right_hand", "none")
 NOMINALS = ("move_to_goal", "rorca")
@@ -76,7 +82,7 @@ class Scenario:
     positive: ClassVar[tuple[str, ...]] = ("dt", "goal_tolerance", "safety_radius", "gamma", "k",
                                            "theta_max", "u_max")  # fmt: skip
     nonnegative: ClassVar[tuple[str, ...]] = ("rh_trigger", "rh_trigger_factor",
-                                              "rorca_goal_reach")
+                                              "rorca_goal_reach", "rorca_goal_hold", "rh_hold")
 
     def __init__(self, **kwargs: Any) -> None:
         self.choose_model(kwargs)
@@ -310,20 +316,14 @@ class Scenario:
         or with ``nominal="rorca"`` the R-ORCA velocity closest to them
         (``rsvo_env.control.rorca``) for the model's steered points (``Dynamics.steered``: the
         unicycle's look-ahead points), bodies ``rorca_pad`` times theirs, horizon
-        ``rorca_tau``."""
+        ``rorca_tau``; with ``rorca_route``, the preferred velocities turned around the knots
+        ahead first (``rsvo_env.control.rorca_route``)."""
         p = self.params
         if p["nominal"] != "rorca":
             return preferred
         points, velocities, extra = self.model.steered(state, p)
-        return rorca.rorca_velocities(
-            points, velocities, preferred, p["rorca_pad"] * (self.radii + extra),
-            state.theta, state.weighting, self.speed, p["dt"], p["rorca_tau"],
-            rules=rorca.Rules(
-                parked=state.at_goal, goals=state.goals,
-                held=stall.held(state.no_progress, p["dt"], rorca.HOLD_SECONDS),
-                omega=state.omega, reach=p["rorca_goal_reach"],
-            ),
-        )  # fmt: skip
+        return scripted_rorca.steer(state, preferred, points, velocities, self.radii + extra, p,
+                                    self.speed)  # fmt: skip
 
     def move_to_goal(self, state: Any, right_hand: bool, speed: float) -> NDArray[np.float64]:
         """The move-to-goal velocity of norm at most ``speed``, turned by the right-hand rule
@@ -339,17 +339,24 @@ class Scenario:
             p["rh_angle_deg"],
         )
 
+    @property
+    def right_hand_on(self) -> bool:
+        """Whether the right-hand rule is on (``deadlock_resolution="right_hand"``)."""
+        return self.params["deadlock_resolution"] == "right_hand"
+
     def turns(self, right_hand: bool) -> bool:
         """Whether the right-hand rule turns the move-to-goal command (R-ORCA's preferred
         velocity too: the turn breaks the symmetric jams ORCA's half-planes alone hold)."""
-        return right_hand and self.params["deadlock_resolution"] == "right_hand"
+        return right_hand and self.right_hand_on
 
     def right_hand_active(self, state: Any) -> NDArray[np.bool_]:
         """(E, N): agents whose nominal the right-hand rule turns (always False without it), from
-        the state's ``nearest`` and ``at_goal``."""
-        if self.params["deadlock_resolution"] != "right_hand":
+        the state's ``nearest``, ``at_goal`` and stall clock (``rh_hold``)."""
+        if not self.right_hand_on:
             return np.zeros(state.nearest.shape, dtype=bool)
-        return nominal.right_hand_active(state.nearest, state.at_goal, self.rh_trigger)
+        active = nominal.right_hand_active(state.nearest, state.at_goal, self.rh_trigger)
+        hold = self.params["rh_hold"]
+        return active & stall.held(state.no_progress, self.params["dt"], hold) if hold else active
 
     def reward(
         self,

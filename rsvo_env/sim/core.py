@@ -217,13 +217,14 @@ class Simulator:
         seg = s.goals[idx] - s.starts[idx]
         s.frame_angle[idx] = np.arctan2(seg[..., 1], seg[..., 0])
         s.headings[idx] = s.frame_angle[idx]  # a unicycle starts facing its goal
+        # the stall clock first: the right-hand rule's hold reads it
+        self.progress.reset(idx, goal_distance(s.positions[idx], s.goals[idx]))
+        s.no_progress = self.progress.steps.copy()
         # what follows from the new positions: nearest distances and neighbours, who is at its
         # goal and whom the right-hand rule turns
         post_step.derive(self, idx)
         s.reached[idx] = s.at_goal[idx]
         self.metrics.reset(idx)
-        self.progress.reset(idx, goal_distance(s.positions[idx], s.goals[idx]))
-        s.no_progress = self.progress.steps.copy()
 
     def set_residual(self, residual: Residual | None) -> None:
         """Residual actions by ``residual``'s rule (None: off): each action is added to the

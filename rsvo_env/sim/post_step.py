@@ -97,7 +97,7 @@ def _episode_end(at_goal, reached, counts, max_steps):
 
 
 @njit(cache=True)
-def _fused(x, before, goals, starts, reached, k, tol, rh_on, trigger, weights, counts,
+def _fused(x, before, goals, starts, reached, k, tol, rh_on, trigger, rh_hold, weights, counts,
            min_distance, infeasible, sums, arrival, min_barrier, applied, requested, feasible,
            min_h, dt, collision_below, series, max_steps, margin, best, stalled_steps,
            nearest, neighbors, at_goal, rh, reward, terminated, truncated):  # fmt: skip
@@ -113,6 +113,8 @@ def _fused(x, before, goals, starts, reached, k, tol, rh_on, trigger, weights, c
     at_goal[:] = _within(x, goals, tol)
     if rh_on:
         rh[:] = right_hand_active(nearest, at_goal, trigger)
+        if rh_hold > 0.0:  # Scenario.right_hand_active's hold, on the clock before this tick
+            rh &= stalled_steps * dt >= rh_hold
     else:
         rh[:] = False
     _accumulate(counts, min_distance, infeasible, sums, arrival, min_barrier, before, x, starts,
@@ -134,7 +136,7 @@ def fused(
     s, sc, m = sim.state, sim.scenario, sim.metrics
     feasible, min_h = m.begin(stats)
     p = sc.params
-    rh_on = p["deadlock_resolution"] == "right_hand"
+    rh_on = sc.right_hand_on
     E, n = s.at_goal.shape
     out = (np.empty((E, n)), np.empty((E, n, sim.k), dtype=np.int64),
            np.empty((E, n), dtype=np.bool_), np.empty((E, n), dtype=np.bool_), np.empty((E, n)),
@@ -149,6 +151,7 @@ def fused(
         float(p["goal_tolerance"]),
         rh_on,
         float(sc.rh_trigger) if rh_on else 0.0,
+        float(p["rh_hold"]),
         sim.reward_weights,
         m.counts,
         m.min_distance,

@@ -1,0 +1,152 @@
+"""R-ORCA's jam routing: a preferred velocity turned around the knots ahead
+(``docs/liveness.md``, "Routing around knots").
+
+Behind the filter a knot of agents cannot press through, as ORCA's least violation does (bodies
+overlapping), and an agent that walks into one joins it: in a crowd of 10,000 the knots grow
+through the second minute until a third of the crowd stands in them. So each agent en route
+farther than ``LOOK`` safety radii from its goal counts the *slow* agents (en route, slower than
+``SLOW`` of the speed limit) within ``PROBE`` safety radii of the point ``LOOK`` radii ahead
+toward its goal. Where there are at least ``CROWDED``, it counts them ahead of each heading of
+``TURNS`` as well and takes the heading whose count plus ``TURN_COST`` per degree of turn is
+least (ties: the earlier of ``TURNS``: straight on, then right before left, the right-hand
+rule's side), its preferred velocity turned by that angle. Every length is in safety radii, so
+the rule reads the same in any unit. The turn changes only what the agent asks: the filter's
+rows, and with them the guarantee, are untouched.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+LOOK = 6.0  # safety radii from the agent to the point it probes
+PROBE = 4.0  # safety radii around that point
+SLOW = 0.5  # of the speed limit: an agent en route slower than this counts as stuck
+CROWDED = 5  # stuck agents ahead that make an agent look for another heading
+TURN_COST = 0.05  # stuck agents a degree of turn is worth
+TURNS = (0.0, -30.0, 30.0, -60.0, 60.0, -90.0, 90.0)  # degrees, counterclockwise positive
+# the scenario keywords the routed crowds run with (``docs/liveness.md``): the routing,
+# R-ORCA's horizon 1.5 s, the goal rule after 1 s at one radius, the right-hand rule only for
+# agents stalled 5 s, bodies the filter's: ``BatchedEnv("crowd", ..., **ROUTED)``
+ROUTED = {"rorca_route": True, "rorca_pad": 1.0, "rorca_tau": 1.5, "rorca_goal_hold": 1.0,
+          "rorca_goal_reach": 1.0, "rh_hold": 5.0}  # fmt: skip
+
+
+def routed(
+    positions: NDArray[np.float64],
+    velocities: NDArray[np.float64],
+    goals: NDArray[np.float64],
+    at_goal: NDArray[np.bool_],
+    preferred: NDArray[np.float64],
+    scale: float,
+    speed: float,
+) -> NDArray[np.float64]:
+    """The preferred velocities (E, N, 2) turned around the knots ahead (module docstring):
+    ``positions``, ``velocities``, ``goals``, ``preferred`` (E, N, 2), ``at_goal`` (E, N),
+    ``scale`` the safety radius, ``speed`` the speed limit."""
+    f = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
+    shape = np.shape(preferred)
+    x, v, g, pref = f(positions), f(velocities), f(goals), f(preferred)
+    E = 1 if x.ndim == 2 else x.shape[0]
+    n = x.shape[-2]
+    out = pref.reshape(E, n, 2).copy()
+    degrees = np.array(TURNS)
+    angles = np.deg2rad(degrees)
+    _route(x.reshape(E, n, 2), v.reshape(E, n, 2), g.reshape(E, n, 2),
+           np.ascontiguousarray(at_goal, np.bool_).reshape(E, n), float(scale),
+           SLOW * float(speed), np.cos(angles), np.sin(angles), np.abs(degrees), out)  # fmt: skip
+    return out.reshape(shape)
+
+
+@njit(cache=True)
+def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
+    """:func:`routed` env by env: the stuck agents in a grid of cells ``PROBE`` wide (wider
+    where they are spread thin, so the cells number at most four per stuck agent), each probe a
+    scan of the cells its disk touches."""
+    E, n = x.shape[0], x.shape[1]
+    look, probe = LOOK * scale, PROBE * scale
+    for e in range(E):
+        stuck = np.empty(n, np.int64)
+        m = 0
+        for i in range(n):
+            s2 = v[e, i, 0] * v[e, i, 0] + v[e, i, 1] * v[e, i, 1]
+            if not at_goal[e, i] and s2 < slow_speed * slow_speed:
+                stuck[m] = i
+                m += 1
+        if m < CROWDED:
+            continue
+        lo_x, lo_y, hi_x, hi_y = np.inf, np.inf, -np.inf, -np.inf
+        for k in range(m):
+            px, py = x[e, stuck[k], 0], x[e, stuck[k], 1]
+            lo_x, lo_y = min(lo_x, px), min(lo_y, py)
+            hi_x, hi_y = max(hi_x, px), max(hi_y, py)
+        cell = probe
+        while ((hi_x - lo_x) / cell + 1.0) * ((hi_y - lo_y) / cell + 1.0) > 4.0 * m + 64.0:
+            cell *= 2.0
+        nx, ny = int((hi_x - lo_x) / cell) + 1, int((hi_y - lo_y) / cell) + 1
+        start = np.zeros(nx * ny + 1, np.int64)
+        home = np.empty(m, np.int64)
+        for k in range(m):
+            i = stuck[k]
+            c = int((x[e, i, 0] - lo_x) / cell) * ny + int((x[e, i, 1] - lo_y) / cell)
+            home[k] = c
+            start[c + 1] += 1
+        for c in range(nx * ny):
+            start[c + 1] += start[c]
+        fill = start[:-1].copy()
+        order = np.empty(m, np.int64)
+        for k in range(m):
+            order[fill[home[k]]] = stuck[k]
+            fill[home[k]] += 1
+        grid = (lo_x, lo_y, cell, nx, ny)
+        for i in range(n):
+            if at_goal[e, i]:
+                continue
+            dx, dy = g[e, i, 0] - x[e, i, 0], g[e, i, 1] - x[e, i, 1]
+            dist = np.sqrt(dx * dx + dy * dy)
+            if dist <= look:
+                continue
+            ux, uy = dx / dist, dy / dist
+            ahead = _count(x[e], order, start, grid, x[e, i, 0] + look * ux,
+                           x[e, i, 1] + look * uy, probe, n)  # fmt: skip
+            if ahead < CROWDED:
+                continue
+            best, cost = 0, float(ahead)
+            for t in range(1, cos_t.shape[0]):
+                hx, hy = cos_t[t] * ux - sin_t[t] * uy, sin_t[t] * ux + cos_t[t] * uy
+                # a heading wins only with fewer than this many: the scan stops when it has them
+                need = cost - TURN_COST * degrees[t]
+                if need <= 0.0:
+                    continue
+                limit = int(np.ceil(need))
+                c = _count(x[e], order, start, grid, x[e, i, 0] + look * hx,
+                           x[e, i, 1] + look * hy, probe, limit)  # fmt: skip
+                if c < limit and c + TURN_COST * degrees[t] < cost:
+                    best, cost = t, c + TURN_COST * degrees[t]
+            px, py = out[e, i, 0], out[e, i, 1]
+            out[e, i, 0] = cos_t[best] * px - sin_t[best] * py
+            out[e, i, 1] = sin_t[best] * px + cos_t[best] * py
+
+
+@njit(cache=True)
+def _count(x, order, start, grid, px, py, radius, limit):
+    """The stuck agents (``order`` by cell, ``start`` each cell's first) within ``radius`` of
+    the point (px, py), or ``limit`` once the count reaches it (the caller needs no more)."""
+    lo_x, lo_y, cell, nx, ny = grid
+    r2 = radius * radius
+    c0 = max(int(np.floor((px - radius - lo_x) / cell)), 0)
+    c1 = min(int(np.floor((px + radius - lo_x) / cell)), nx - 1)
+    r0 = max(int(np.floor((py - radius - lo_y) / cell)), 0)
+    r1 = min(int(np.floor((py + radius - lo_y) / cell)), ny - 1)
+    count = 0
+    for a in range(c0, c1 + 1):
+        for b in range(r0, r1 + 1):
+            c = a * ny + b
+            for k in range(start[c], start[c + 1]):
+                j = order[k]
+                ex, ey = x[j, 0] - px, x[j, 1] - py
+                count += ex * ex + ey * ey <= r2
+            if count >= limit:
+                return limit
+    return count

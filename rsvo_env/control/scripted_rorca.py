@@ -1,0 +1,37 @@
+"""The scenarios' scripted R-ORCA: the state's rules read into one call of R-ORCA
+(``rsvo_env.control.rorca``), after the routing around knots where it is on
+(``rsvo_env.control.rorca_route``)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from numpy.typing import NDArray
+
+from rsvo_env.control import rorca, rorca_route, stall
+
+
+def steer(
+    state: Any, preferred: NDArray, points: NDArray, velocities: NDArray, radii: NDArray,
+    params: dict[str, Any], speed: float,
+) -> NDArray:  # fmt: skip
+    """R-ORCA's velocities (E, N, 2) closest to the ``preferred`` ones for the steered
+    ``points`` moving at ``velocities``, bodies ``radii`` (before ``rorca_pad``), the speed
+    limit ``speed``; the scenario's ``params`` give the horizon, the pad, the goal rule's reach
+    and hold, and whether the preferred velocities are routed around knots first."""
+    p = params
+    if p["rorca_route"]:
+        preferred = rorca_route.routed(points, velocities, state.goals, state.at_goal, preferred,
+                                       p["safety_radius"], speed)  # fmt: skip
+    clock = lambda seconds: stall.held(state.no_progress, p["dt"], seconds)  # noqa: E731
+    hold = p["rorca_goal_hold"]
+    return rorca.rorca_velocities(
+        points, velocities, preferred, p["rorca_pad"] * radii, state.theta, state.weighting,
+        speed, p["dt"], p["rorca_tau"],
+        rules=rorca.Rules(
+            parked=state.at_goal, goals=state.goals, held=clock(rorca.HOLD_SECONDS),
+            omega=state.omega, reach=p["rorca_goal_reach"],
+            # the stages' own clock where the goal rule's hold is theirs (bit for bit as before)
+            goal_held=None if hold == rorca.HOLD_SECONDS else clock(hold),
+        ),
+    )  # fmt: skip
