@@ -33,6 +33,8 @@ from liveness_report import (  # a sibling module: benchmarks/ is the script's o
     HELD_OUT_HEADING,
     HELD_OUT_SEEDS,
     LEARNED_HEADING,
+    ROUTED_BIG_HEADING,
+    ROUTED_HEADING,
     SYMMETRIC_HEADING,
     big_section,
     circular_section,
@@ -40,12 +42,15 @@ from liveness_report import (  # a sibling module: benchmarks/ is the script's o
     held_out_section,
     plot,
     replace_section,
+    routed_big_section,
+    routed_section,
     seconds_cell,
     symmetric_section,
     write,
 )
 
 from rsvo_env.control.nominal import move_to_goal
+from rsvo_env.control.rorca_route import ROUTED
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.scenarios import paired_theta
 from rsvo_env.util.neighbors import nearest_distance
@@ -152,11 +157,12 @@ def diagnosis(configs=DIAGNOSIS, n: int = 10_000, seed: int = 0, cap: int = DIAG
     return [*rows, {"label": "ORCA (pyrvo)", "ours": orca(*rows[0]["ours"]["start"], cap)}]
 
 
-def crowds(sizes, seeds, cap, weighting: str = "asymmetric") -> list[dict]:
+def crowds(sizes, seeds, cap, weighting: str = "asymmetric", **kw) -> list[dict]:
     rows = []
     for n in sizes:
         for seed in seeds:
-            a = ours(n, seed, cap, theta_range=(1.0, 10.0), gamma=GAMMA, weighting=weighting)
+            a = ours(n, seed, cap, theta_range=(1.0, 10.0), gamma=GAMMA, weighting=weighting,
+                     **kw)  # fmt: skip
             b = orca(*a["start"], cap)
             rows.append({"n": n, "seed": seed, "ours": a, "orca": b})
             print(n, seed, a["arrived"][-1], a["makespan"], b["arrived"][-1], b["makespan"],
@@ -276,6 +282,17 @@ def main(argv: list[str] | None = None) -> int:
         help="run the crowd of 10,000 for 100 s with R-ORCA's rules, the weighting and the"
         " filter taken away one at a time, replacing its section in --out",
     )
+    ap.add_argument(
+        "--routed",
+        action="store_true",
+        help="run the crowds of 1,000 of the table's and the held-out seeds routed around"
+        " knots alone, replacing their section in --out",
+    )
+    ap.add_argument(
+        "--routed-big",
+        action="store_true",
+        help="run the crowd of 10,000 routed around knots alone, replacing its section in --out",
+    )
     ap.add_argument("--out", type=Path, default=RESULTS / "liveness.md")
     ap.add_argument(
         "--circular-only",
@@ -322,6 +339,19 @@ def main(argv: list[str] | None = None) -> int:
         long = diagnosis(DIAGNOSIS_LONG, cap=BIG_CAP, with_orca=False)
         section = diagnosis_section(diagnosis(), long)
         replace_section(args.out, DIAGNOSIS_HEADING, section, "## Crowd of 1,000, symmetric")
+        return 0
+    if args.routed:
+        table = crowds((1000,), range(10), 4000, **ROUTED)
+        held = crowds((1000,), HELD_OUT_SEEDS, 4000, **ROUTED)
+        replace_section(args.out, ROUTED_HEADING, routed_section(ROUTED, table, held),
+                        "## Circular swap")  # fmt: skip
+        return 0
+    if args.routed_big:
+        rows = crowds((10_000,), range(1), BIG_CAP, **ROUTED)
+        replace_section(args.out, ROUTED_BIG_HEADING, routed_big_section(ROUTED, rows),
+                        "## Circular swap")  # fmt: skip
+        plot(rows, args.out.with_name("liveness_10000_routed.png"),
+             ours="R-ORCA routed + filter", title="crowd routed around knots")
         return 0
     if args.big:
         rows = crowds((10_000,), range(1), BIG_CAP)

@@ -19,8 +19,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from scaling import DT, Orca  # noqa: E402
 
-from rsvo_env.control import rorca  # noqa: E402
+from rsvo_env.control import rorca, rorca_route  # noqa: E402
 from rsvo_env.control.nominal import move_to_goal  # noqa: E402
+from rsvo_env.control.rorca_route import ROUTED  # noqa: E402
 from rsvo_env.envs.vector import BatchedEnv  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -33,31 +34,50 @@ def stage_against_orca(n: int, blocks: int) -> dict:
     for _ in range(20):
         orca.step()
     sc, reps = orca.sc, max(3, 20_000 // n)
-    orca_s = rorca_s = 0.0
+    orca_s = rorca_s = route_s = still_s = 0.0
     for _ in range(blocks):
         x = orca.positions()[None]
         v = np.array([[p.x, p.y] for p in map(orca.sim.get_agent_velocity, range(n))])[None]
         pref = move_to_goal(x, orca.goals[None], sc.params["k"], sc.params["u_max"])
         theta = np.random.default_rng(1).uniform(1, 10, (1, n))
-        rules = rorca.Rules(np.zeros((1, n), bool), orca.goals[None], np.zeros((1, n), bool))
+        parked = np.zeros((1, n), bool)
+        rules = rorca.Rules(parked, orca.goals[None], np.zeros((1, n), bool))
         args = (x, v, pref, 1.05 * sc.radii, theta, ["asymmetric"], sc.params["u_max"], DT)
+        # with the crowd's own velocities, and every agent at rest: then every one counts as
+        # stuck and every one probes every heading (the most the rule can cost)
+        route = (x, v, orca.goals[None], parked, pref, sc.params["safety_radius"],
+                 sc.params["u_max"])  # fmt: skip
+        still = (x, 0.0 * v, *route[2:])
         rorca.rorca_velocities(*args, rules=rules)  # compiled, warm
+        rorca_route.routed(*route)
+        rorca_route.routed(*still)
         t0 = time.perf_counter()
         for _ in range(reps):
             rorca.rorca_velocities(*args, rules=rules)
         rorca_s += time.perf_counter() - t0
+        t0 = time.perf_counter()
+        for _ in range(reps):
+            rorca_route.routed(*route)
+        route_s += time.perf_counter() - t0
+        t0 = time.perf_counter()
+        for _ in range(reps):
+            rorca_route.routed(*still)
+        still_s += time.perf_counter() - t0
         orca.busy = 0.0
         for _ in range(reps):
             orca.step()
         orca_s += orca.busy
     per = 1e6 / (blocks * reps * n)
-    return {"n": n, "orca": orca_s * per, "rorca": rorca_s * per, "ratio": rorca_s / orca_s}
+    return {"n": n, "orca": orca_s * per, "rorca": rorca_s * per, "ratio": rorca_s / orca_s,
+            "route": route_s * per, "routed_ratio": (rorca_s + route_s) / orca_s,
+            "still": still_s * per, "still_ratio": (rorca_s + still_s) / orca_s}  # fmt: skip
 
 
-def env_steps(blocks: int, steps: int = 20) -> dict:
-    """Agent-steps/s of the 16 x 256 crowd: a step with given actions, and a step with
-    ``nominal_actions()`` computed first (R-ORCA, the crowd's scripted controller)."""
-    env = BatchedEnv("crowd", num_envs=256, num_agents=16, safety_filter=True)
+def env_steps(blocks: int, steps: int = 20, **kw) -> dict:
+    """Agent-steps/s of the 16 x 256 crowd (the scenario's keywords ``kw``): a step with given
+    actions, and a step with ``nominal_actions()`` computed first (R-ORCA, the crowd's
+    scripted controller)."""
+    env = BatchedEnv("crowd", num_envs=256, num_agents=16, safety_filter=True, **kw)
     env.reset(seed=0)
     for _ in range(30):
         env.step(env.nominal_actions())
@@ -84,6 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     rows = [stage_against_orca(n, args.blocks) for n in args.sizes]
     env = env_steps(args.blocks)
+    routed = env_steps(args.blocks, **ROUTED)
     lines = [
         "# R-ORCA's cost",
         "",
@@ -92,14 +113,25 @@ def main(argv: list[str] | None = None) -> int:
         "process on the same dense crowd (`benchmarks/scaling.py`'s, theta U(1, 10)); R-ORCA's "
         "call whole (its neighbour search, weights and compiled stage).",
         "",
-        "| N | ORCA's C++ step [us/agent-step] | R-ORCA [us/agent-step] | R-ORCA / ORCA |",
-        "|---|---|---|---|",
+        "| N | ORCA's C++ step [us/agent-step] | R-ORCA [us/agent-step] | R-ORCA / ORCA |"
+        " routing [us/agent-step] | R-ORCA routed / ORCA | routing, every agent at rest"
+        " [us/agent-step] | R-ORCA routed / ORCA, every agent at rest |",
+        "|---|---|---|---|---|---|---|---|",
         *(f"| {r['n']:,} | {r['orca']:.2f} | {r['rorca']:.2f} | {r['ratio']:.2f} |"
-          for r in rows),  # fmt: skip
+          f" {r['route']:.2f} | {r['routed_ratio']:.2f} | {r['still']:.2f} |"
+          f" {r['still_ratio']:.2f} |" for r in rows),  # fmt: skip
+        "",
+        "Routing around knots (`rsvo_env.control.rorca_route`) timed on the same crowd, with its"
+        " agents' velocities (ORCA's), and with every agent at rest: then every one counts as"
+        " stuck, and every agent farther from its goal than the look-ahead probes every heading"
+        " (the most the rule can cost; a knot of that size is what the rule keeps from forming).",
         "",
         "`BatchedEnv(\"crowd\", num_envs=256, num_agents=16, safety_filter=True)`: a step with "
         f"given actions {env['given'] / 1e6:.2f} M agent-steps/s, a step with "
-        f"`nominal_actions()` {env['nominal'] / 1e6:.2f} M, {env['ratio']:.2f}x of it.",
+        f"`nominal_actions()` {env['nominal'] / 1e6:.2f} M, {env['ratio']:.2f}x of it. The same"
+        " crowd routed around knots (`rsvo_env.control.rorca_route.ROUTED`): "
+        f"{routed['given'] / 1e6:.2f} M and {routed['nominal'] / 1e6:.2f} M, "
+        f"{routed['ratio']:.2f}x.",
         "",
         "History (the same script): at adfb164, before R-ORCA's compiled stage, R-ORCA / ORCA "
         "was 5.21, 3.75 and 4.62 and the crowd step with `nominal_actions()` 0.03x; at 1992ff5, "
