@@ -219,3 +219,19 @@ def test_routed_crowds_of_every_model_finish_with_no_collision(model):
     env.reset(seed=0)
     reached = run_to_goals(env, 3000)
     assert reached.all(), f"{int((~reached).sum())} agents never reached their goals"
+
+
+@pytest.mark.parametrize("change,field", [
+    ({"goals": np.zeros((1, 5, 2))}, "goals"),
+    ({"at_goal": np.zeros((1, 4), bool)}, "at_goal"),
+    ({"scale": 0.0}, "scale"),
+    ({"scale": float("nan")}, "scale"),
+    ({"speed": True}, "speed"),
+    ({"speed": -2.0}, "speed"),
+])  # fmt: skip
+def test_routed_refuses_bad_input_by_name(change, field):
+    x = np.zeros((1, 6, 2))
+    kw = {"positions": x, "velocities": x, "goals": x, "at_goal": np.zeros((1, 6), bool),
+          "preferred": x, "scale": 1.0, "speed": 2.0, **change}  # fmt: skip
+    with pytest.raises(ValueError, match=field):
+        rorca_route.routed(**kw)

@@ -48,6 +48,14 @@ def routed(
     f = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
     shape = np.shape(preferred)
     x, v, g, pref = f(positions), f(velocities), f(goals), f(preferred)
+    shapes = {"positions": x.shape, "velocities": v.shape, "goals": g.shape, "preferred": shape}
+    if len(set(shapes.values())) > 1 or not 2 <= len(shape) <= 3 or shape[-1] != 2:
+        raise ValueError(f"routed: {shapes} must be one shape, (E, N, 2) or (N, 2)")
+    if np.shape(at_goal) != shape[:-1]:
+        raise ValueError(f"routed: at_goal has shape {np.shape(at_goal)}, expected {shape[:-1]}")
+    for name, value in (("scale", scale), ("speed", speed)):
+        if not (np.isreal(value) and np.isfinite(value) and value > 0) or isinstance(value, bool):
+            raise ValueError(f"routed: {name} = {value!r} must be a positive finite number")
     E = 1 if x.ndim == 2 else x.shape[0]
     n = x.shape[-2]
     out = pref.reshape(E, n, 2).copy()
