@@ -24,7 +24,7 @@ def grid_stage(x, v, pref, radii, theta, modes, K, parked, goals, held, u_max=2.
     xf, vf, pf, gf = f(x), f(v), f(pref), f(goals)
     r = f(np.broadcast_to(radii, (E, n))).reshape(M)
     omega = rorca_dense.matrices(theta, modes) if any(map(callable, modes)) else None
-    rules = (parked.reshape(M), held.reshape(M), True, rorca.GOAL_REACH)
+    rules = (parked.reshape(M), held.reshape(M), True, rorca.GOAL_REACH, held.reshape(M))
     out = rorca_grid.stage(n, (xf, vf, gf, pf, r), theta, symmetric_envs(modes), omega, rules,
                            (K, u_max, 2.0, dt, 10.0 * float(r.max())))  # fmt: skip
     return out.reshape(E, n, 2)

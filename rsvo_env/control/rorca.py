@@ -194,13 +194,10 @@ def rorca_velocities(
     motion, tied = (x, v, g, pref0, r), parked is not None
     settings = (K, float(u_max), float(tau), float(dt), float(neighbor_dist))
     flags = np.zeros(M, np.bool_) if parked is None else np.ascontiguousarray(parked, np.bool_)
-    flags = flags.reshape(M)
-    if tied and goals is not None and goal_held is not None:
-        # the goal rule on its own clock: the agents it holds count as parked, as the stages
-        # would count them (counts_parked), and the stages' own reach is off
-        flags = flags | goal_blocked(x, g, r, np.reshape(goal_held, M), reach)
-        reach = 0.0
-    rules = (flags, hold, tied, float(reach))
+    # the goal rule reads its own clock where given (and goals are), else the arrival cap's
+    own = goal_held is not None and goals is not None
+    goal_hold = np.ascontiguousarray(goal_held, np.bool_).reshape(M) if own else hold
+    rules = (flags.reshape(M), hold, tied, float(reach), goal_hold)
     if n > sizes.DENSE_MAX_AGENTS:  # a grid scan for each agent's K nearest, ORCA's way
         if omega is None and any(callable(m) for m in modes):
             omega = rorca_dense.matrices(theta, modes)

@@ -50,15 +50,15 @@ def _caps(lo, hi, n, motion, rules, tau, cut, pref, park):
     """Agents lo..hi's preferred velocities with the arrival cap into ``pref``
     (``rorca.arrival_capped``), their neighbours within ``cut`` scanned only where the cap can
     apply, and whether each counts as parked into ``park``: ``rules`` (parked, held, tied,
-    reach), who counts as parked by ``rorca_agent.counts_parked``.
+    reach, goal_held), who counts as parked by ``rorca_agent.counts_parked``.
     Every pass is a function called once a block, its helpers given scalars: an array handed to
     an inlined helper costs two atomic reference counts, as much as an agent's arithmetic."""
     x, g, pref0, r = motion[0], motion[2], motion[3], motion[4]
-    parked, held, tied, reach = rules
+    parked, held, tied, reach, goal_held = rules
     cut2 = within(cut)
     for a in range(lo, hi):
         xa, ga, pa = (x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), (pref0[a, 0], pref0[a, 1])
-        park[a] = counts_parked(tied, parked[a], xa, ga, r[a], held[a], reach)
+        park[a] = counts_parked(tied, parked[a], xa, ga, r[a], goal_held[a], reach)
         wanted, speed, dist = cap_wanted(pa, xa, ga, held[a], tau)
         gap = np.inf
         if wanted:
@@ -162,8 +162,9 @@ def stage(
 ) -> NDArray[np.float64]:
     """R-ORCA's velocities (E * n, 2), clipped to the speed limit, for envs of ``n`` agents:
     ``motion`` (x, v, goals, preferred, radii), flat (E * n, ...); ``omega`` (E, n, n) the
-    weight matrices; ``rules`` (parked, held, tied, reach): the agents parked and held
-    (E * n,), whether the parked rule is on and the goal rule's reach; ``settings`` (K, u_max,
+    weight matrices; ``rules`` (parked, held, tied, reach, goal_held): the agents parked and
+    held (E * n,), whether the parked rule is on, the goal rule's reach and the agents held long
+    enough for it (E * n,); ``settings`` (K, u_max,
     tau, dt, cut), K < 0 for every neighbour within the cut."""
     W = np.ascontiguousarray(omega, dtype=np.float64).reshape(-1, n)
     M = motion[0].shape[0]

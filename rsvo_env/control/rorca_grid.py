@@ -63,7 +63,7 @@ def _index(x, n, cut):
 
 
 @njit(cache=True)
-def _gather(perm, motion, theta, parked, held, tied, reach):
+def _gather(perm, motion, theta, parked, held, tied, reach, goal_held):
     """The agents' data in cell order (copies), the order both passes visit and read them in:
     (x, v, goals, preferred, radii, theta, parked, held), who counts as parked by
     ``rorca_agent.counts_parked``."""
@@ -78,7 +78,7 @@ def _gather(perm, motion, theta, parked, held, tied, reach):
         gs[s, 0], gs[s, 1], ps[s, 0], ps[s, 1] = g[a, 0], g[a, 1], pref0[a, 0], pref0[a, 1]
         rs[s], ths[s], holds[s] = r[a], theta[a], held[a]
         parks[s] = counts_parked(tied, parked[a], (x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a],
-                                 held[a], reach)  # fmt: skip
+                                 goal_held[a], reach)  # fmt: skip
     return xs, vs, gs, ps, rs, ths, parks, holds
 
 
@@ -276,8 +276,9 @@ def stage(
     """R-ORCA's velocities (E * n, 2), clipped to the speed limit, for envs of ``n`` agents:
     ``motion`` (x, v, goals, preferred, radii), flat (E * n, ...); the weights from the matrices
     ``omega`` (E, n, n) where given, else from the scores ``theta`` (E, n), 1/2 in the
-    ``symmetric`` (E,) envs; ``rules`` (parked, held, tied, reach): the agents parked and held
-    (E * n,), whether the parked rule is on and the goal rule's reach; ``settings`` (K, u_max,
+    ``symmetric`` (E,) envs; ``rules`` (parked, held, tied, reach, goal_held): the agents parked
+    and held (E * n,), whether the parked rule is on, the goal rule's reach and the agents held
+    long enough for it (E * n,); ``settings`` (K, u_max,
     tau, dt, cut), K < 0 for every neighbour within the cut."""
     M = motion[0].shape[0]
     if omega is None:

@@ -24,14 +24,11 @@ def steer(
         preferred = rorca_route.routed(points, velocities, state.goals, state.at_goal, preferred,
                                        p["safety_radius"], speed)  # fmt: skip
     clock = lambda seconds: stall.held(state.no_progress, p["dt"], seconds)  # noqa: E731
-    hold = p["rorca_goal_hold"]
     return rorca.rorca_velocities(
         points, velocities, preferred, p["rorca_pad"] * radii, state.theta, state.weighting,
         speed, p["dt"], p["rorca_tau"],
         rules=rorca.Rules(
             parked=state.at_goal, goals=state.goals, held=clock(rorca.HOLD_SECONDS),
-            omega=state.omega, reach=p["rorca_goal_reach"],
-            # the stages' own clock where the goal rule's hold is theirs (bit for bit as before)
-            goal_held=None if hold == rorca.HOLD_SECONDS else clock(hold),
+            omega=state.omega, reach=p["rorca_goal_reach"], goal_held=clock(p["rorca_goal_hold"]),
         ),
     )  # fmt: skip
