@@ -33,8 +33,6 @@ from liveness_report import (  # a sibling module: benchmarks/ is the script's o
     HELD_OUT_HEADING,
     HELD_OUT_SEEDS,
     LEARNED_HEADING,
-    ROUTED_BIG_HEADING,
-    ROUTED_HEADING,
     SYMMETRIC_HEADING,
     big_section,
     circular_section,
@@ -42,44 +40,44 @@ from liveness_report import (  # a sibling module: benchmarks/ is the script's o
     held_out_section,
     plot,
     replace_section,
-    routed_big_section,
-    routed_section,
     seconds_cell,
     symmetric_section,
     write,
 )
 
+from rsvo_env.control import rorca
 from rsvo_env.control.nominal import move_to_goal
-from rsvo_env.control.rorca_route import ROUTED
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.scenarios import paired_theta
+from rsvo_env.scenarios.crowd import UNROUTED
 from rsvo_env.util.neighbors import nearest_distance
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 GAMMA = 20.0  # gamma dt = 1, as the training configs run the crowd
 ROTATIONS = 10  # circular swaps, each turned by a random angle
-# what holds the crowd of 10,000 back against ORCA (issue 45): the parts taken away one at a time
-NO_TURN = {"deadlock_resolution": "none"}
-NO_SPLIT = {**NO_TURN, "weighting": "symmetric"}
-BARE = {**NO_SPLIT, "rorca_pad": 1.0, "rorca_goal_reach": 0.0}  # ORCA behind the filter
-BARE_LABEL = "no right-hand rule, the symmetric weighting, `rorca_pad = 1`, the goal rule off"
+# what holds the crowd of 10,000 back (issue 45): the crowd's settings changed one at a time
+NO_TURN = {"rorca_route": False, "deadlock_resolution": "none"}
+# ORCA behind the filter: no routing, no right-hand rule, no goal rule, ORCA's split and horizon
+BARE = {**NO_TURN, "rorca_goal_reach": 0.0, "weighting": "symmetric", "rorca_tau": 2.0}
+BARE_LABEL = ("no routing, no right-hand rule, the goal rule off, the symmetric weighting, horizon"
+              " 2 s: ORCA's controller")
 DIAGNOSIS = (
-    ("R-ORCA behind the filter (the crowd table's setting)", {}),
+    ("R-ORCA routed behind the filter (the crowd table's setting)", {}),
+    ("routing off (the right-hand rule turns R-ORCA's velocity again)", {"rorca_route": False}),
+    ("routing off, no right-hand rule", NO_TURN),
+    ("routing off, R-ORCA's general rules as before routing (horizon"
+     f" {UNROUTED['rorca_tau']:g} s, bodies {UNROUTED['rorca_pad']:g} R, the goal rule after"
+     f" {UNROUTED['rorca_goal_hold']:g} s within {UNROUTED['rorca_goal_reach']:g} radii)",
+     UNROUTED),
     ("the goal rule off (`rorca_goal_reach = 0`)", {"rorca_goal_reach": 0.0}),
-    ("the right-hand turn at 15 degrees, not 30", {"rh_angle_deg": 15.0}),
-    ("the right-hand rule only within 1.25 R, not 1.5 R", {"rh_trigger_factor": 1.25}),
-    ("R-ORCA's horizon 1 s, not 2 s", {"rorca_tau": 1.0}),
-    ("no right-hand rule", NO_TURN),
-    ("no right-hand rule, R-ORCA's bodies the filter's (`rorca_pad = 1`)",
-     {**NO_TURN, "rorca_pad": 1.0}),
-    ("no right-hand rule, the symmetric weighting", NO_SPLIT),
-    ("no right-hand rule, the symmetric weighting, `rorca_pad = 1`",
-     {**NO_SPLIT, "rorca_pad": 1.0}),
-    ("no right-hand rule, `rorca_pad = 1`, no filter", {**NO_TURN, "rorca_pad": 1.0,
-                                                        "safety_filter": False}),
-    ("no right-hand rule, the symmetric weighting, `rorca_pad = 1`, no filter",
-     {**NO_SPLIT, "rorca_pad": 1.0, "safety_filter": False}),
+    (f"the goal rule after {rorca.HOLD_SECONDS:g} s, not 1 s",
+     {"rorca_goal_hold": rorca.HOLD_SECONDS}),
+    ("R-ORCA's horizon 2 s, not 1.5 s", {"rorca_tau": 2.0}),
+    ("R-ORCA's bodies 1.05 R, not R", {"rorca_pad": 1.05}),
+    ("the symmetric weighting", {"weighting": "symmetric"}),
+    ("no filter", {"safety_filter": False}),
+    ("the symmetric weighting, no filter", {"weighting": "symmetric", "safety_filter": False}),
     (BARE_LABEL, BARE),
     (BARE_LABEL + ", no filter", {**BARE, "safety_filter": False}),
 )  # fmt: skip
@@ -282,17 +280,6 @@ def main(argv: list[str] | None = None) -> int:
         help="run the crowd of 10,000 for 100 s with R-ORCA's rules, the weighting and the"
         " filter taken away one at a time, replacing its section in --out",
     )
-    ap.add_argument(
-        "--routed",
-        action="store_true",
-        help="run the crowds of 1,000 of the table's and the held-out seeds routed around"
-        " knots alone, replacing their section in --out",
-    )
-    ap.add_argument(
-        "--routed-big",
-        action="store_true",
-        help="run the crowd of 10,000 routed around knots alone, replacing its section in --out",
-    )
     ap.add_argument("--out", type=Path, default=RESULTS / "liveness.md")
     ap.add_argument(
         "--circular-only",
@@ -339,19 +326,6 @@ def main(argv: list[str] | None = None) -> int:
         long = diagnosis(DIAGNOSIS_LONG, cap=BIG_CAP, with_orca=False)
         section = diagnosis_section(diagnosis(), long)
         replace_section(args.out, DIAGNOSIS_HEADING, section, "## Crowd of 1,000, symmetric")
-        return 0
-    if args.routed:
-        table = crowds((1000,), range(10), 4000, **ROUTED)
-        held = crowds((1000,), HELD_OUT_SEEDS, 4000, **ROUTED)
-        replace_section(args.out, ROUTED_HEADING, routed_section(ROUTED, table, held),
-                        "## Circular swap")  # fmt: skip
-        return 0
-    if args.routed_big:
-        rows = crowds((10_000,), range(1), BIG_CAP, **ROUTED)
-        replace_section(args.out, ROUTED_BIG_HEADING, routed_big_section(ROUTED, rows),
-                        "## Circular swap")  # fmt: skip
-        plot(rows, args.out.with_name("liveness_10000_routed.png"),
-             ours="R-ORCA routed + filter", title="crowd routed around knots")
         return 0
     if args.big:
         rows = crowds((10_000,), range(1), BIG_CAP)

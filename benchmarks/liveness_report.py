@@ -17,8 +17,6 @@ SYMMETRIC_HEADING = "## Crowd of 1,000, symmetric weighting"
 HELD_OUT_HEADING = "## Crowd of 1,000, held-out seeds"
 HELD_OUT_SEEDS = range(10, 20)
 LEARNED_HEADING = "## The learned residual at scale"
-ROUTED_HEADING = "## Crowds of 1,000, routed around knots"
-ROUTED_BIG_HEADING = "## Crowd of 10,000, routed around knots"
 # benchmarks/liveness_models.py's section
 MODELS_HEADING = "## Every model"
 
@@ -159,10 +157,10 @@ def diagnosis_section(rows: list, long: list = (), start: float = 25.0) -> list[
         DIAGNOSIS_HEADING,
         "",
         "Written by `python benchmarks/liveness.py --diagnose`: the crowd of 10,000 above (seed"
-        f" 0, dt = {DT}, gamma = 20, theta 1..10) for {DIAGNOSIS_CAP * DT:.0f} s, R-ORCA's rules,"
-        " the responsibility weighting and the filter changed one at a time (the last row:"
-        " ORCA on the same starts and goals). Without the filter nothing keeps the bodies"
-        " apart (the closest pair).",
+        f" 0, dt = {DT}, gamma = 20, theta 1..10) for {DIAGNOSIS_CAP * DT:.0f} s, the routing,"
+        " R-ORCA's rules, the responsibility weighting and the filter changed one at a time"
+        " (the last row: ORCA on the same starts and goals). Without the filter nothing keeps"
+        " the bodies apart (the closest pair).",
         "",
         "| configuration | " + " | ".join(f"at goal, {t:.0f} s" for t in DIAGNOSIS_MARKS)
         + f" | {DIAGNOSIS_MARKS[-1]:.0f} s, over ORCA's | least over ORCA's from {start:.0f} s"
@@ -236,34 +234,6 @@ def held_out_section(rows: list) -> list[str]:
     )
 
 
-def _routed_text(flag: str, routed: dict) -> str:
-    args = ", ".join(f"{k}={v!r}" for k, v in routed.items())
-    return (
-        f"Written by `python benchmarks/liveness.py {flag}`: the crowd table's setting with"
-        f" R-ORCA routed around knots and its rules set for it (`{args}`:"
-        " `rsvo_env.control.rorca_route.ROUTED`, `docs/liveness.md`)."
-    )
-
-
-def routed_section(routed: dict, table: list, held: list) -> list[str]:
-    """The crowds of 1,000 of the table's seeds and of the held-out ones, routed."""
-    return [ROUTED_HEADING, "", _routed_text("--routed", routed), "",
-            "The crowd table's seeds:", "", *crowd_table(table), "",
-            f"The held-out seeds {HELD_OUT_SEEDS.start} to {HELD_OUT_SEEDS.stop - 1}:", "",
-            *crowd_table(held), ""]  # fmt: skip
-
-
-def routed_big_section(routed: dict, rows: list) -> list[str]:
-    """The crowd of 10,000, routed: its table, its share at goal against time, its least ratio
-    to ORCA's."""
-    return [ROUTED_BIG_HEADING, "", _routed_text("--routed-big", routed)
-            + f" One seed, cap {BIG_CAP} steps.", "", *crowd_table(rows), "",
-            "Share of agents at their goals against time:", "", *share_at(rows, BIG_MARKS), "",
-            *least_ratio(rows), "",
-            "![share of agents arrived against time, N = 10,000, routed]"
-            "(liveness_10000_routed.png)", ""]  # fmt: skip
-
-
 def _crowd_section(heading: str, text: str, rows: list) -> list[str]:
     return [heading, "", text, "", *crowd_table(rows), ""]
 
@@ -300,7 +270,7 @@ def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
     # liveness_models.py's survive a full run
     old = path.read_text() if path.exists() else ""
     path.write_text("\n".join(lines) + "\n")
-    for heading in (BIG_HEADING, ROUTED_BIG_HEADING, ROUTED_HEADING, DIAGNOSIS_HEADING,
+    for heading in (BIG_HEADING, DIAGNOSIS_HEADING,
                     SYMMETRIC_HEADING, HELD_OUT_HEADING, LEARNED_HEADING,
                     MODELS_HEADING):  # fmt: skip
         if heading in old:
@@ -325,7 +295,7 @@ def _span(text: str, heading: str) -> tuple[int, int]:
     return start, (nxt + 1 if nxt >= 0 else len(text))
 
 
-def plot(rows: list, path: Path, ours: str = "R-ORCA + filter", title: str = "crowd") -> None:
+def plot(rows: list, path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -335,13 +305,13 @@ def plot(rows: list, path: Path, ours: str = "R-ORCA + filter", title: str = "cr
     fig, axes = plt.subplots(1, len(sizes), figsize=(4.2 * len(sizes), 3.6), squeeze=False)
     for ax, n in zip(axes[0], sizes, strict=True):
         for r in [r for r in rows if r["n"] == n]:
-            for key, color, label in (("ours", "tab:red", f"ours ({ours})"),
+            for key, color, label in (("ours", "tab:red", "ours (R-ORCA + filter)"),
                                       ("orca", "tab:blue", "ORCA (pyrvo)")):  # fmt: skip
                 y = r[key]["arrived"]
                 t = DT * np.arange(1, len(y) + 1)
                 ax.plot(t, 100 * y, color=color, alpha=0.6, lw=1,
                         label=label if r["seed"] == 0 else None)  # fmt: skip
-        ax.set_title(f"{title}, N = {n:,}")
+        ax.set_title(f"crowd, N = {n:,}")
         ax.set_xlabel("time [s]")
         ax.set_ylabel("agents that reached their goals [%]")
         ax.grid(True, alpha=0.3)

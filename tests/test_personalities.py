@@ -34,3 +34,17 @@ def test_seeds_and_assignments_are_independent_in_the_batch():
 def test_the_objective_counts_an_unfinished_episode_as_twice_the_cap():
     stats = {"completed": np.array([[100.0, -1.0], [50.0, 70.0]])}
     assert objective(stats, 300).tolist() == [350.0, 60.0]
+
+
+def test_a_right_hand_rule_first_fired_after_the_resolution_resolved_no_deadlock():
+    """Routed R-ORCA's right-hand rule waits 5 s of no progress, so in crowds it can first fire
+    after every agent has passed its midpoint: no deadlock was resolved then (NaN), never a
+    negative time; where it fired first, the time is resolved - onset."""
+    kwargs = {"num_agents": 12, "dt": 0.05, "gamma": 20.0, "max_steps": 4000,
+              "theta_range": [1.0, 10.0]}  # fmt: skip
+    seeds = list(range(1000, 1040))
+    stats = evaluate(None, seeds, "crowd", **kwargs)
+    res = stats["resolution"][0]
+    assert np.isnan(res).any() and not (res < 0).any()
+    at_once = evaluate(None, seeds, "crowd", rh_hold=0.0, **kwargs)["resolution"][0]
+    assert np.isfinite(at_once).any() and not (at_once < 0).any()

@@ -13,7 +13,6 @@ from rsvo_env.control.rorca_route import (
     CROWDED,
     LOOK,
     PROBE,
-    ROUTED,
     SLOW,
     TURN_COST,
     TURNS,
@@ -160,7 +159,8 @@ def test_the_goal_rule_on_its_own_clock_is_the_stages_rule_when_the_clocks_agree
                                           ({"rorca_route": "yes"}, "rorca_route"),
                                           ({"rorca_route": 1}, "rorca_route"),
                                           ({"rh_hold": -0.1}, "rh_hold"),
-                                          ({"rh_hold": float("inf")}, "rh_hold")])  # fmt: skip
+                                          ({"rh_hold": float("inf")}, "rh_hold"),
+                                          ({"rh_hold": "5"}, "rh_hold")])  # fmt: skip
 def test_routing_and_the_holds_refuse_bad_values_by_name(kwargs, field):
     with pytest.raises(ValueError, match=field):
         BatchedEnv("crowd", num_envs=1, num_agents=4, **kwargs)
@@ -172,7 +172,7 @@ def test_the_right_hand_rule_with_a_hold_turns_only_agents_stalled_that_long(fus
     trigger, short of the goal) that have come no closer to their goals for the hold, on both
     after-step paths; and some are turned, some held back."""
     env = BatchedEnv("crowd", num_envs=2, num_agents=30, theta_range=(1.0, 10.0), dt=0.05,
-                     gamma=20.0, rh_hold=0.5, max_steps=2000)  # fmt: skip
+                     gamma=20.0, rh_hold=0.5, max_steps=2000, rorca_route=False)  # fmt: skip
     env.sim.fused_post_step = fused
     env.reset(seed=4)
     sc, s = env.sim.scenario, env.sim.state
@@ -189,11 +189,11 @@ def test_the_right_hand_rule_with_a_hold_turns_only_agents_stalled_that_long(fus
 
 @pytest.mark.parametrize("seed", range(3))
 def test_a_routed_crowd_of_400_finishes_behind_the_filter_with_no_collision(seed):
-    """R-ORCA routed around knots, its rules set as the routed crowds of 1,000 and 10,000 run
-    them, behind the unchanged filter: every agent arrives, no pair ever closer than
+    """The crowd's defaults route R-ORCA around knots (its rules set for crowds of 1,000 and
+    10,000), behind the unchanged filter: every agent arrives, no pair ever closer than
     R (1 - 1e-9), and the routing turns some agents' preferred velocities on the way."""
     env = BatchedEnv("crowd", num_envs=1, safety_filter=True, num_agents=400, max_steps=3000,
-                     dt=0.05, gamma=20.0, theta_range=(1.0, 10.0), **ROUTED)  # fmt: skip
+                     dt=0.05, gamma=20.0, theta_range=(1.0, 10.0))  # fmt: skip
     env.reset(seed=seed)
     sc, s = env.sim.scenario, env.sim.state
     turned = []
@@ -209,13 +209,24 @@ def test_a_routed_crowd_of_400_finishes_behind_the_filter_with_no_collision(seed
     assert sum(turned) > 0
 
 
+@pytest.mark.parametrize("nominal,route,hold", [("rorca", True, rorca_route.RH_HOLD),
+                                                ("rorca", False, 0.0),
+                                                ("move_to_goal", True, 0.0)])  # fmt: skip
+def test_the_right_hand_rules_hold_defaults_to_the_controllers_own(nominal, route, hold):
+    """Routed R-ORCA's right-hand rule waits RH_HOLD seconds of no progress (its last resort);
+    unrouted R-ORCA's and the paper's move-to-goal's fires at once; a given hold wins."""
+    kw = dict(num_envs=1, num_agents=4, nominal=nominal, rorca_route=route)
+    assert BatchedEnv("crowd", **kw).sim.scenario.params["rh_hold"] == hold
+    assert BatchedEnv("crowd", rh_hold=0.25, **kw).sim.scenario.params["rh_hold"] == 0.25
+
+
 @pytest.mark.parametrize("model", ["double_integrator", "unicycle"])
 def test_routed_crowds_of_every_model_finish_with_no_collision(model):
-    """The routing reads the model's steered points and their velocities (the unicycle's
-    look-ahead points): routed crowds of 100 double integrators and unicycles arrive, every
-    pair at least R (1 - 1e-9) apart."""
+    """The crowd routes every model by default. The routing reads the model's steered points
+    and their velocities (the unicycle's look-ahead points): routed crowds of 100 double
+    integrators and unicycles arrive, every pair at least R (1 - 1e-9) apart."""
     env = BatchedEnv("crowd", num_envs=1, num_agents=100, dynamics=model, dt=0.05, gamma=20.0,
-                     theta_range=(1.0, 10.0), max_steps=3000, **ROUTED)  # fmt: skip
+                     theta_range=(1.0, 10.0), max_steps=3000)  # fmt: skip
     env.reset(seed=0)
     reached = run_to_goals(env, 3000)
     assert reached.all(), f"{int((~reached).sum())} agents never reached their goals"

@@ -36,7 +36,9 @@ def evaluate(
     """Every assignment of ``theta`` (S, N) on every seed (None: the scenario's own, S = 1):
     arrays (S, len(seeds)) of the step all agents are first at their goals (``completed``, -1 if
     never), the deadlock's resolution time (``resolution``: steps from its onset to its
-    resolution, NaN without one), ``success``, ``collision_steps``, ``infeasible`` agent-steps
+    resolution, NaN without one: where the right-hand rule first fired only after every agent
+    had passed its midpoint, as routed R-ORCA's held rule does, no deadlock was resolved),
+    ``success``, ``collision_steps``, ``infeasible`` agent-steps
     and ``min_distance``. ``kwargs``: the env's keywords (scenario parameters, ``max_steps``,
     the filter's)."""
     th = None if theta is None else np.atleast_2d(np.asarray(theta, dtype=np.float64))
@@ -57,7 +59,7 @@ def evaluate(
                 out[key][ended] = info[f"episode_{key}"][ended]
             onset, resolved = metrics.deadlock_onset[ended], metrics.deadlock_resolved[ended]
             out["resolution"][ended] = np.where(
-                (onset >= 0) & (resolved >= 0), resolved - onset, np.nan
+                (onset >= 0) & (resolved >= onset), resolved - onset, np.nan
             )
             done |= ended
     return {k: v.reshape(S, K) for k, v in out.items()}

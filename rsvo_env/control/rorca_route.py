@@ -11,7 +11,10 @@ toward its goal. Where there are at least ``CROWDED``, it counts them ahead of e
 least (ties: the earlier of ``TURNS``: straight on, then right before left, the right-hand
 rule's side), its preferred velocity turned by that angle. Every length is in safety radii, so
 the rule reads the same in any unit. The turn changes only what the agent asks: the filter's
-rows, and with them the guarantee, are untouched.
+rows, and with them the guarantee, are untouched. Routing is R-ORCA's way around a knot where
+it is on; the right-hand rule is then its last resort, for agents that have come no closer to
+their goals for ``RH_HOLD`` seconds (the scenario's ``rh_hold`` default). The crowd routes by
+default (``rsvo_env.scenarios.crowd``), R-ORCA's rules set for it.
 """
 
 from __future__ import annotations
@@ -26,12 +29,7 @@ SLOW = 0.5  # of the speed limit: an agent en route slower than this counts as s
 CROWDED = 5  # stuck agents ahead that make an agent look for another heading
 TURN_COST = 0.05  # stuck agents a degree of turn is worth
 TURNS = (0.0, -30.0, 30.0, -60.0, 60.0, -90.0, 90.0)  # degrees, counterclockwise positive
-# the scenario keywords the routed crowds run with (``docs/liveness.md``): the routing,
-# R-ORCA's horizon 1.5 s, the goal rule after 1 s at one radius, the right-hand rule only for
-# agents stalled 5 s, bodies the filter's: ``BatchedEnv("crowd", ..., **ROUTED)``
-ROUTED = {"rorca_route": True, "rorca_pad": 1.0, "rorca_tau": 1.5, "rorca_goal_hold": 1.0,
-          "rorca_goal_reach": 1.0, "rh_hold": 5.0}  # fmt: skip
-
+RH_HOLD = 5.0  # s: routed, the right-hand rule turns only agents stalled this long
 
 def routed(
     positions: NDArray[np.float64],
@@ -102,10 +100,12 @@ def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
             start[c + 1] += 1
         for c in range(nx * ny):
             start[c + 1] += start[c]
+        # the stuck agents' positions in cell order: a probe reads them contiguously
         fill = start[:-1].copy()
-        order = np.empty(m, np.int64)
+        xs = np.empty((m, 2))
         for k in range(m):
-            order[fill[home[k]]] = stuck[k]
+            xs[fill[home[k]], 0] = x[e, stuck[k], 0]
+            xs[fill[home[k]], 1] = x[e, stuck[k], 1]
             fill[home[k]] += 1
         grid = (lo_x, lo_y, cell, nx, ny)
         for i in range(n):
@@ -116,8 +116,8 @@ def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
             if dist <= look:
                 continue
             ux, uy = dx / dist, dy / dist
-            ahead = _count(x[e], order, start, grid, x[e, i, 0] + look * ux,
-                           x[e, i, 1] + look * uy, probe, n)  # fmt: skip
+            ahead = _count(xs, start, grid, x[e, i, 0] + look * ux, x[e, i, 1] + look * uy,
+                           probe, n)  # fmt: skip
             if ahead < CROWDED:
                 continue
             best, cost = 0, float(ahead)
@@ -128,8 +128,8 @@ def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
                 if need <= 0.0:
                     continue
                 limit = int(np.ceil(need))
-                c = _count(x[e], order, start, grid, x[e, i, 0] + look * hx,
-                           x[e, i, 1] + look * hy, probe, limit)  # fmt: skip
+                c = _count(xs, start, grid, x[e, i, 0] + look * hx, x[e, i, 1] + look * hy,
+                           probe, limit)  # fmt: skip
                 if c < limit and c + TURN_COST * degrees[t] < cost:
                     best, cost = t, c + TURN_COST * degrees[t]
             px, py = out[e, i, 0], out[e, i, 1]
@@ -138,9 +138,10 @@ def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
 
 
 @njit(cache=True)
-def _count(x, order, start, grid, px, py, radius, limit):
-    """The stuck agents (``order`` by cell, ``start`` each cell's first) within ``radius`` of
-    the point (px, py), or ``limit`` once the count reaches it (the caller needs no more)."""
+def _count(xs, start, grid, px, py, radius, limit):
+    """The stuck agents (positions ``xs`` in cell order, ``start`` each cell's first) within
+    ``radius`` of the point (px, py), or ``limit`` once the count reaches it (the caller needs
+    no more). Cells the disk does not reach are skipped."""
     lo_x, lo_y, cell, nx, ny = grid
     r2 = radius * radius
     c0 = max(int(np.floor((px - radius - lo_x) / cell)), 0)
@@ -149,11 +150,15 @@ def _count(x, order, start, grid, px, py, radius, limit):
     r1 = min(int(np.floor((py + radius - lo_y) / cell)), ny - 1)
     count = 0
     for a in range(c0, c1 + 1):
+        # the gap from the point to the cell's column, then to the cell
+        gx = max(lo_x + a * cell - px, px - lo_x - (a + 1) * cell, 0.0)
         for b in range(r0, r1 + 1):
+            gy = max(lo_y + b * cell - py, py - lo_y - (b + 1) * cell, 0.0)
+            if gx * gx + gy * gy > r2 * (1.0 + 1e-6):  # the slack: cell edges' rounding
+                continue
             c = a * ny + b
             for k in range(start[c], start[c + 1]):
-                j = order[k]
-                ex, ey = x[j, 0] - px, x[j, 1] - py
+                ex, ey = xs[k, 0] - px, xs[k, 1] - py
                 count += ex * ex + ey * ey <= r2
             if count >= limit:
                 return limit

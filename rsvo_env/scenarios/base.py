@@ -18,7 +18,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env import dynamics
-from rsvo_env.control import nominal, rorca, scripted_rorca, stall
+from rsvo_env.control import nominal, rorca, rorca_route, scripted_rorca, stall
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.util.planar import within
@@ -36,8 +36,9 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "goal_tolerance": 0.05,
     "deadlock_resolution": "right_hand",
     # the right-hand rule turns only agents that have come no closer to their goals for this
-    # long (s; the stall clock, rsvo_env.control.stall): 0, every agent it fires for
-    "rh_hold": 0.0,
+    # long (s; the stall clock, rsvo_env.control.stall): 0, every agent it fires for; None, the
+    # controller's own: rorca_route.RH_HOLD where R-ORCA routes around knots, else 0
+    "rh_hold": None,
     "theta": None,
     "theta_max": 1000.0,
     # (low, high): each episode draws every agent's theta uniformly from it (env's generator)
@@ -131,6 +132,10 @@ class Scenario:
         for key in (*self.positive, *self.model.scenario_positive):
             if key in params:
                 params[key] = check_positive(params[key], f"{self.name}.{key}")
+        if params["rh_hold"] is None:  # the controller's own: routing's last resort waits
+            routed = params["nominal"] == "rorca" and params["rorca_route"]
+            params["rh_hold"] = rorca_route.RH_HOLD if routed else 0.0
+        params["rh_hold"] = check_real(params["rh_hold"], f"{self.name}.rh_hold")
         for key in self.nonnegative:
             if key in params and params[key] < 0:
                 raise ValueError(f"{self.name}.{key} = {params[key]!r} must be >= 0")
