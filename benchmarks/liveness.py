@@ -277,8 +277,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--diagnose",
         action="store_true",
-        help="run the crowd of 10,000 for 100 s with R-ORCA's rules, the weighting and the"
-        " filter taken away one at a time, replacing its section in --out",
+        help="run the crowd of 10,000 for 100 s with the routing, R-ORCA's rules, the weighting"
+        " and the filter changed one at a time, replacing its section in --out",
     )
     ap.add_argument("--out", type=Path, default=RESULTS / "liveness.md")
     ap.add_argument(

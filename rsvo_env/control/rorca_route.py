@@ -31,6 +31,7 @@ TURN_COST = 0.05  # stuck agents a degree of turn is worth
 TURNS = (0.0, -30.0, 30.0, -60.0, 60.0, -90.0, 90.0)  # degrees, counterclockwise positive
 RH_HOLD = 5.0  # s: routed, the right-hand rule turns only agents stalled this long
 
+
 def routed(
     positions: NDArray[np.float64],
     velocities: NDArray[np.float64],
