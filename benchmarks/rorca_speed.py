@@ -157,8 +157,9 @@ def main(argv: list[str] | None = None) -> int:
         "(about half of those scanned lie beyond it). The same velocities, bit for bit. At "
         "230d50f, R-ORCA timed at its general pad 1.05 and horizon 2 s, before the crowd "
         "routed by default: 0.40, 0.35 and 0.38, routed with every agent at rest 0.47, 0.63 and "
-        "0.72, before the routing's probes read the stuck agents' positions in cell order and "
-        "skipped the cells out of reach (the same turns, bit for bit).",
+        "0.72, before the routing's probes read the stuck agents' positions in cell order, "
+        "skipped the cells out of reach and scanned cells of their diameter, not their radius "
+        "(the same turns, bit for bit).",
         "",
     ]
     Path(args.out).write_text("\n".join(lines))

@@ -68,9 +68,11 @@ def routed(
 
 @njit(cache=True)
 def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
-    """:func:`routed` env by env: the stuck agents in a grid of cells ``PROBE`` wide (wider
-    where they are spread thin, so the cells number at most four per stuck agent), each probe a
-    scan of the cells its disk touches."""
+    """:func:`routed` env by env: the stuck agents in a grid of cells a probe's diameter wide
+    (a probe's disk touches two per axis, so it visits four; cells of its radius, nine to
+    visit, cost 15 % more with every agent stuck), wider where the stuck agents are spread thin
+    (the cells number at most four per stuck agent); each probe a scan of the cells its disk
+    touches."""
     E, n = x.shape[0], x.shape[1]
     look, probe = LOOK * scale, PROBE * scale
     for e in range(E):
@@ -88,7 +90,7 @@ def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
             px, py = x[e, stuck[k], 0], x[e, stuck[k], 1]
             lo_x, lo_y = min(lo_x, px), min(lo_y, py)
             hi_x, hi_y = max(hi_x, px), max(hi_y, py)
-        cell = probe
+        cell = 2.0 * probe
         while ((hi_x - lo_x) / cell + 1.0) * ((hi_y - lo_y) / cell + 1.0) > 4.0 * m + 64.0:
             cell *= 2.0
         nx, ny = int((hi_x - lo_x) / cell) + 1, int((hi_y - lo_y) / cell) + 1
