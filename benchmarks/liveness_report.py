@@ -270,9 +270,8 @@ def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
     # liveness_models.py's survive a full run
     old = path.read_text() if path.exists() else ""
     path.write_text("\n".join(lines) + "\n")
-    for heading in (BIG_HEADING, DIAGNOSIS_HEADING,
-                    SYMMETRIC_HEADING, HELD_OUT_HEADING, LEARNED_HEADING,
-                    MODELS_HEADING):  # fmt: skip
+    for heading in (BIG_HEADING, DIAGNOSIS_HEADING, SYMMETRIC_HEADING, HELD_OUT_HEADING,
+                    LEARNED_HEADING, MODELS_HEADING):  # fmt: skip
         if heading in old:
             start, end = _span(old, heading)
             body = old[start:end].rstrip("\n").split("\n")

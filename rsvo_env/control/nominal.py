@@ -62,11 +62,18 @@ def move_to_goal(
 
 @njit(cache=True)
 def right_hand_active(
-    nearest: NDArray[np.float64], at_goal: NDArray[np.bool_], trigger: float
+    nearest: NDArray[np.float64],
+    at_goal: NDArray[np.bool_],
+    trigger: float,
+    stalled: NDArray[np.int64],
+    dt: float,
+    hold: float,
 ) -> NDArray[np.bool_]:
     """Agents for which the right-hand rule fires: the nearest neighbour closer than
-    ``trigger``, and the agent not at its goal (arrays (..., N))."""
-    return (nearest < trigger) & ~at_goal
+    ``trigger``, the agent not at its goal, and no closer to it for ``hold`` seconds or more
+    (``stalled`` steps of ``dt``: the stall clock, ``rsvo_env.control.stall.held``; a hold of 0
+    every agent); arrays (..., N)."""
+    return (nearest < trigger) & ~at_goal & (stalled * dt >= hold)
 
 
 def lane_following(

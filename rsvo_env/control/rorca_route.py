@@ -23,6 +23,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from rsvo_env.util.validation import check_positive
+
 LOOK = 6.0  # safety radii from the agent to the point it probes
 PROBE = 4.0  # safety radii around that point
 SLOW = 0.5  # of the speed limit: an agent en route slower than this counts as stuck
@@ -52,17 +54,15 @@ def routed(
         raise ValueError(f"routed: {shapes} must be one shape, (E, N, 2) or (N, 2)")
     if np.shape(at_goal) != shape[:-1]:
         raise ValueError(f"routed: at_goal has shape {np.shape(at_goal)}, expected {shape[:-1]}")
-    for name, value in (("scale", scale), ("speed", speed)):
-        if not (np.isreal(value) and np.isfinite(value) and value > 0) or isinstance(value, bool):
-            raise ValueError(f"routed: {name} = {value!r} must be a positive finite number")
+    scale, speed = check_positive(scale, "routed: scale"), check_positive(speed, "routed: speed")
     E = 1 if x.ndim == 2 else x.shape[0]
     n = x.shape[-2]
     out = pref.reshape(E, n, 2).copy()
     degrees = np.array(TURNS)
     angles = np.deg2rad(degrees)
     _route(x.reshape(E, n, 2), v.reshape(E, n, 2), g.reshape(E, n, 2),
-           np.ascontiguousarray(at_goal, np.bool_).reshape(E, n), float(scale),
-           SLOW * float(speed), np.cos(angles), np.sin(angles), np.abs(degrees), out)  # fmt: skip
+           np.ascontiguousarray(at_goal, np.bool_).reshape(E, n), scale, SLOW * speed,
+           np.cos(angles), np.sin(angles), np.abs(degrees), out)  # fmt: skip
     return out.reshape(shape)
 
 

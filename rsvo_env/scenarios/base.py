@@ -18,7 +18,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env import dynamics
-from rsvo_env.control import nominal, rorca, rorca_route, scripted_rorca, stall
+from rsvo_env.control import nominal, rorca, rorca_route, scripted_rorca
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.util.planar import within
@@ -359,9 +359,9 @@ class Scenario:
         the state's ``nearest``, ``at_goal`` and stall clock (``rh_hold``)."""
         if not self.right_hand_on:
             return np.zeros(state.nearest.shape, dtype=bool)
-        active = nominal.right_hand_active(state.nearest, state.at_goal, self.rh_trigger)
-        hold = self.params["rh_hold"]
-        return active & stall.held(state.no_progress, self.params["dt"], hold) if hold else active
+        return nominal.right_hand_active(state.nearest, state.at_goal, self.rh_trigger,
+                                         state.no_progress, self.params["dt"],
+                                         self.params["rh_hold"])  # fmt: skip
 
     def reward(
         self,

@@ -112,9 +112,8 @@ def _fused(x, before, goals, starts, reached, k, tol, rh_on, trigger, rh_hold, w
                 neighbors[e, i, c] = idx[e, i, c]
     at_goal[:] = _within(x, goals, tol)
     if rh_on:
-        rh[:] = right_hand_active(nearest, at_goal, trigger)
-        if rh_hold > 0.0:  # Scenario.right_hand_active's hold, on the clock before this tick
-            rh &= stalled_steps * dt >= rh_hold
+        # Scenario.right_hand_active's, on the clock before this tick
+        rh[:] = right_hand_active(nearest, at_goal, trigger, stalled_steps, dt, rh_hold)
     else:
         rh[:] = False
     _accumulate(counts, min_distance, infeasible, sums, arrival, min_barrier, before, x, starts,
