@@ -49,7 +49,7 @@ from rsvo_env.control import rorca
 from rsvo_env.control.nominal import move_to_goal
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.scenarios import paired_theta
-from rsvo_env.scenarios.crowd import UNROUTED
+from rsvo_env.scenarios.crowd import ROUTED, UNROUTED
 from rsvo_env.util.neighbors import nearest_distance
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -71,10 +71,10 @@ DIAGNOSIS = (
      f" {UNROUTED['rorca_goal_hold']:g} s within {UNROUTED['rorca_goal_reach']:g} radii)",
      UNROUTED),
     ("the goal rule off (`rorca_goal_reach = 0`)", {"rorca_goal_reach": 0.0}),
-    (f"the goal rule after {rorca.HOLD_SECONDS:g} s, not 1 s",
+    (f"the goal rule after {rorca.HOLD_SECONDS:g} s, not {ROUTED['rorca_goal_hold']:g} s",
      {"rorca_goal_hold": rorca.HOLD_SECONDS}),
-    ("R-ORCA's horizon 2 s, not 1.5 s", {"rorca_tau": 2.0}),
-    ("R-ORCA's bodies 1.05 R, not R", {"rorca_pad": 1.05}),
+    (f"R-ORCA's horizon 2 s, not {ROUTED['rorca_tau']:g} s", {"rorca_tau": 2.0}),
+    (f"R-ORCA's bodies 1.05 R, not {ROUTED['rorca_pad']:g} R", {"rorca_pad": 1.05}),
     ("the symmetric weighting", {"weighting": "symmetric"}),
     ("no filter", {"safety_filter": False}),
     ("the symmetric weighting, no filter", {"weighting": "symmetric", "safety_filter": False}),

@@ -52,6 +52,8 @@ COMMON_DEFAULTS: dict[str, Any] = {
     # of its goal yields as if parked; a reach of 0 turns the rule off
     "rorca_goal_reach": rorca.GOAL_REACH,
     "rorca_goal_hold": rorca.HOLD_SECONDS,
+    # ... and so does one within that reach of a goal it has reached (the crowd's; scripted_rorca)
+    "rorca_goal_reached": False,
     # R-ORCA's preferred velocity turned around the knots ahead (rsvo_env.control.rorca_route)
     "rorca_route": False,
 }
