@@ -27,6 +27,7 @@ import numpy as np
 from liveness_report import (  # a sibling module: benchmarks/ is the script's own path
     BIG_CAP,
     BIG_HEADING,
+    BIG_SEEDS,
     DIAGNOSIS_CAP,
     DIAGNOSIS_HEADING,
     DT,
@@ -328,7 +329,7 @@ def main(argv: list[str] | None = None) -> int:
         replace_section(args.out, DIAGNOSIS_HEADING, section, "## Crowd of 1,000, symmetric")
         return 0
     if args.big:
-        rows = crowds((10_000,), range(1), BIG_CAP)
+        rows = crowds((10_000,), BIG_SEEDS, BIG_CAP)
         replace_section(args.out, BIG_HEADING, big_section(rows), "## Circular swap")
         plot(rows, args.out.with_name("liveness_10000.png"))
         return 0

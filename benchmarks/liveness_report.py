@@ -9,6 +9,7 @@ import numpy as np
 DT = 0.05
 BIG_HEADING = "## Crowd of 10,000"
 BIG_CAP = 9000  # 450 s: issue 45 asks for 99.9 % at goal by then
+BIG_SEEDS = range(4)
 BIG_MARKS = (25.0, 50.0, 75.0, 100.0, 150.0, 200.0, 300.0, 450.0)
 DIAGNOSIS_HEADING = "## What holds the crowd of 10,000 back"
 DIAGNOSIS_CAP = 2000  # 100 s
@@ -124,25 +125,44 @@ def share_at(rows: list, seconds: tuple[float, ...]) -> list[str]:
 def _least(ours, orca, start: float) -> tuple[float, int, float]:
     """(ratio, step, ORCA's share there): the least ratio of two arrival series, ``ours`` over
     ``orca``, at any step from ``start`` seconds to the end of ``ours`` (ORCA's share held once
-    it has finished)."""
+    it has finished; a step where ORCA has no agent home bounds nothing)."""
     a, b = np.asarray(ours), np.asarray(orca)
-    steps = np.arange(int(round(start / DT)) - 1, len(a))
+    steps = np.arange(max(int(round(start / DT)) - 1, 0), len(a))
     theirs = b[np.minimum(steps, len(b) - 1)]
-    k = int(np.argmin(a[steps] / theirs))
-    return float(a[steps[k]] / theirs[k]), int(steps[k]), float(theirs[k])
+    ratio = np.divide(a[steps], theirs, out=np.full(len(steps), np.inf), where=theirs > 0)
+    k = int(np.argmin(ratio))
+    return float(ratio[k]), int(steps[k]), float(theirs[k])
 
 
-def least_ratio(rows: list, start: float = 25.0) -> list[str]:
-    """Per run, the least ratio of the shares at goal, ours over ORCA's, at any step from
-    ``start`` seconds on (ORCA's share held once it has finished)."""
+def _agents(share: float, n: int) -> str:
+    count = round(share * n)
+    return f"{100 * share:.2f} %, {count:,} agent{'' if count == 1 else 's'}"
+
+
+def least_ratio(rows: list, start: float = 25.0, bound: float = 0.9) -> list[str]:
+    """Per run, the least ratio of the shares at goal, ours over ORCA's, at every step (issue 45:
+    "at every time"; where few agents are home it is a ratio of a handful of arrivals, so the
+    counts are given, and the last time it was under ``bound``) and at every step from ``start``
+    seconds on (ORCA's share held once it has finished)."""
     lines = []
     for r in rows:
-        a = r["ours"]["arrived"]
-        ratio, k, theirs = _least(a, r["orca"]["arrived"], start)
+        a, b, n = r["ours"]["arrived"], r["orca"]["arrived"], r["n"]
+        ratio, k, theirs = _least(a, b, 0.0)
+        late, j, late_theirs = _least(a, b, start)
+        under = ""
+        if ratio < bound:
+            held = np.asarray(b)[np.minimum(np.arange(len(a)), len(b) - 1)]
+            last = int(np.flatnonzero(np.asarray(a) < bound * held)[-1])
+            under = (
+                f", under {bound} times it last at {(last + 1) * DT:.2f} s"
+                f" ({_agents(a[last], n)} against {_agents(held[last], n)})"
+            )
         lines.append(
-            f"- N = {r['n']:,}, seed {r['seed']}: from {start:.0f} s on, the share at goal is at"
-            f" least {ratio:.2f} times ORCA's (the least at {(k + 1) * DT:.2f} s:"
-            f" {100 * a[k]:.1f} % against {100 * theirs:.1f} %)"
+            f"- N = {n:,}, seed {r['seed']}: at every time, the share at goal is at least"
+            f" {ratio:.2f} times ORCA's (the least at {(k + 1) * DT:.2f} s: {_agents(a[k], n)}"
+            f" against {_agents(theirs, n)}{under}); from {start:.0f} s on, at least {late:.2f}"
+            f" times ORCA's (the least at {(j + 1) * DT:.2f} s: {100 * a[j]:.1f} % against"
+            f" {100 * late_theirs:.1f} %)"
         )
     return lines
 
@@ -193,8 +213,8 @@ def big_section(rows: list) -> list[str]:
     return [
         BIG_HEADING,
         "",
-        f"Written by `python benchmarks/liveness.py --big` (one seed, cap {BIG_CAP} steps);"
-        " the same setting as above.",
+        f"Written by `python benchmarks/liveness.py --big` (seeds {BIG_SEEDS[0]} to"
+        f" {BIG_SEEDS[-1]}, cap {BIG_CAP} steps); the same setting as above.",
         "",
         *crowd_table(rows),
         "",
