@@ -122,16 +122,21 @@ def share_at(rows: list, seconds: tuple[float, ...]) -> list[str]:
     return lines
 
 
-def _least(ours, orca, start: float) -> tuple[float, int, float]:
-    """(ratio, step, ORCA's share there): the least ratio of two arrival series, ``ours`` over
-    ``orca``, at any step from ``start`` seconds to the end of ``ours`` (ORCA's share held once
-    it has finished; a step where ORCA has no agent home bounds nothing)."""
+def _ratios(ours, orca) -> tuple[np.ndarray, np.ndarray]:
+    """(ratio, ORCA's share) at each step of ``ours``: ours over ORCA's, ORCA's share held once
+    it has finished; a step where ORCA has no agent home bounds nothing (ratio inf)."""
     a, b = np.asarray(ours), np.asarray(orca)
-    steps = np.arange(max(int(round(start / DT)) - 1, 0), len(a))
-    theirs = b[np.minimum(steps, len(b) - 1)]
-    ratio = np.divide(a[steps], theirs, out=np.full(len(steps), np.inf), where=theirs > 0)
-    k = int(np.argmin(ratio))
-    return float(ratio[k]), int(steps[k]), float(theirs[k])
+    theirs = b[np.minimum(np.arange(len(a)), len(b) - 1)]
+    return np.divide(a, theirs, out=np.full(len(a), np.inf), where=theirs > 0), theirs
+
+
+def _least(ours, orca, start: float) -> tuple[float, int, float]:
+    """(ratio, step, ORCA's share there): the least of ``_ratios`` at any step from ``start``
+    seconds to the end of ``ours``."""
+    ratio, theirs = _ratios(ours, orca)
+    first = max(int(round(start / DT)) - 1, 0)
+    k = first + int(np.argmin(ratio[first:]))
+    return float(ratio[k]), k, float(theirs[k])
 
 
 def _agents(share: float, n: int) -> str:
@@ -151,8 +156,8 @@ def least_ratio(rows: list, start: float = 25.0, bound: float = 0.9) -> list[str
         late, j, late_theirs = _least(a, b, start)
         under = ""
         if ratio < bound:
-            held = np.asarray(b)[np.minimum(np.arange(len(a)), len(b) - 1)]
-            last = int(np.flatnonzero(np.asarray(a) < bound * held)[-1])
+            every, held = _ratios(a, b)
+            last = int(np.flatnonzero(every < bound)[-1])
             under = (
                 f", under {bound} times it last at {(last + 1) * DT:.2f} s"
                 f" ({_agents(a[last], n)} against {_agents(held[last], n)})"
