@@ -7,6 +7,7 @@ import copy
 import pytest
 
 from rsvo_env.cli import main as rsvo
+from rsvo_env.cli import scene_file, simulate
 from rsvo_env.envs.parallel import RSVOParallelEnv
 from training import config as configs
 from training import evaluate, train
@@ -94,6 +95,9 @@ SMALL = ["--scenario", "position_swap", "--timesteps", "64", "--num-envs", "2"]
         (["--set", "rllib.bogus=1"], ["rllib", "bogus"]),
         (["--set", "residual_right_hand=nope"], ["residual_right_hand", "nope"]),
         (["--set", "gate_radius=abc"], ["gate_radius", "abc"]),
+        # the filter's settings are checked with the filter off too (they are saved with the run)
+        (["--set", "env.safety_filter=false", "--set", "env.gamma=-1"], ["gamma", "-1"]),
+        (["--set", "env.safety_filter=false", "--set", "env.barrier=bogus"], ["barrier", "bogus"]),
         (["--out", "{afile}/run"], ["afile", "not a directory"]),
     ],
 )
@@ -154,3 +158,70 @@ def test_sweep_refuses_bad_arguments_before_any_trial(tmp_path, a_file, capsys, 
     line = one_error_line(capsys)
     assert all(w in line for w in words), line
     assert not (tmp_path / "sweep").exists()
+
+
+SCENE = "starts: [[0, 0], [4, 0]]\ngoals: [[4, 0], [0, 0]]\n"
+
+
+@pytest.mark.parametrize("line,flag", [
+    ("theta: [1, 3]", ["--theta", "1", "3"]),
+    ("weighting: symmetric", ["--weighting", "symmetric"]),
+    ("seed: 3", ["--seed", "3"]),
+    ("safety_filter: false", ["--no-filter"]),
+])  # fmt: skip
+def test_a_scene_file_may_hold_the_runs_own_settings(tmp_path, capsys, monkeypatch, line, flag):
+    """``theta``, ``weighting``, ``seed`` and ``safety_filter`` in a scene file run as the flag
+    would (they crashed: "run() got multiple values for keyword argument"); given in both
+    places, one error line before any work."""
+    seen = []
+    real = simulate.run
+    monkeypatch.setattr(simulate, "run", lambda *a, **k: seen.append(k) or real(*a, **k))
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(SCENE + line + "\n")
+    assert exit_code(lambda: rsvo.main(["simulate", "custom", "--scene", str(scene)])) in (0, 1)
+    key, value = line.split(": ")
+    expect = {"theta": [1, 3], "weighting": "symmetric", "seed": 3, "safety_filter": False}[key]
+    assert seen[-1][key] == expect
+    capsys.readouterr()
+    code = exit_code(lambda: rsvo.main(["simulate", "custom", "--scene", str(scene), *flag]))
+    assert code == 2 and "given twice" in one_error_line(capsys)
+    assert len(seen) == 1
+
+
+@pytest.mark.parametrize("text,words", [
+    (SCENE + "safety_filter: 'no'\n", ["safety_filter", "'no'"]),
+    (SCENE + "seed: 1.5\n", ["seed", "1.5"]),
+    (SCENE + "starts: [[0, 1], [4, 1]]\n", ["starts", "twice"]),
+    ("a: &x [1, *x]\n" + SCENE, ["refers to itself"]),
+    (SCENE + "dt: 1e-300\n", ["dt", "1e-300", "too small"]),
+    (SCENE + "dt: 1.0e-18\n", ["dt", "too small"]),
+])  # fmt: skip
+def test_bad_scene_files_are_one_error_line(tmp_path, capsys, text, words):
+    """A scene file's run settings checked as flags are, a key given twice (YAML 1.2 requires
+    unique keys; JSON below), a recursive alias, a dt too small for any step count."""
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(text)
+    assert exit_code(lambda: rsvo.main(["simulate", "custom", "--scene", str(scene)])) == 2
+    line = one_error_line(capsys)
+    assert all(w in line for w in words), line
+
+
+def test_a_json_scene_with_a_key_twice_is_refused(tmp_path, capsys):
+    scene = tmp_path / "scene.json"
+    scene.write_text('{"starts": [[0, 0], [4, 0]], "goals": [[4, 0], [0, 0]], "goals": [[1, 1]]}')
+    assert exit_code(lambda: rsvo.main(["simulate", "custom", "--scene", str(scene)])) == 2
+    assert "'goals' is given twice" in one_error_line(capsys)
+
+
+def test_aliases_expand_to_at_most_a_million_values(tmp_path, capsys):
+    """Six levels of ten aliases each (about 300 bytes, a million numbers: once a 3.1 MB error
+    line) are refused by size before any use; five levels (100,000 numbers) are read."""
+    lines = ["a0: &a0 [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]"]
+    lines += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 10)}]" for i in range(1, 6)]
+    # 11 + 111 + ... + 111,111 values (each list counts) and the mapping
+    assert scene_file.check_size(scene_file.load_yaml("\n".join(lines[:5]))) == 123_456
+    scene = tmp_path / "scene.yaml"
+    scene.write_text("\n".join(lines) + "\nstarts: *a5\n")
+    assert exit_code(lambda: rsvo.main(["simulate", "custom", "--scene", str(scene)])) == 2
+    line = one_error_line(capsys)
+    assert "1,000,000 values" in line and len(line) < 200

@@ -140,3 +140,67 @@ def test_a_row_past_the_disk_leaves_its_nearest_point():
     """v_x <= -7 with the disk of radius 5: the least violation is at (-5, 0)."""
     room, v = solved(np.array([[1.0, 0.0, -7.0]]), np.array([1.0, 1.0]), 5.0)
     assert not room and v.tolist() == [-5.0, 0.0]
+
+
+def concurrent(rng: np.random.Generator, K: int, r: float, q: np.ndarray, spread: float):
+    """K unit-normal rows whose lines all pass through q (``a . v <= a . q``): their only common
+    point may be q itself, a chord that rounds to a point. ``spread`` 0: directions anywhere;
+    else within ``spread`` radians of one (nearly parallel lines) or of its opposite."""
+    angles = rng.uniform(0, 2 * np.pi, K)
+    if spread:
+        angles = angles[0] + rng.uniform(-spread, spread, K) + np.pi * rng.integers(0, 2, K)
+    a = np.stack([np.cos(angles), np.sin(angles)], axis=-1)
+    return np.ascontiguousarray(np.concatenate([a, (a @ q)[:, None]], axis=-1))
+
+
+def test_lines_through_one_feasible_point_keep_it():
+    """Five rows whose lines pass through q = (-0.375, 0.125) in the unit disk, preferred
+    (-1.25, 0.75): in 2,500 draws of their directions there is room, and the velocity is never
+    further from p than q (the solver once read the chord that rounds to q as empty and
+    returned the least-violating velocity, up to 1.46 r too far)."""
+    q, p = np.array([-0.375, 0.125]), np.array([-1.25, 0.75])
+    rng = np.random.default_rng(0)
+    for _ in range(2500):
+        rows = concurrent(rng, 5, 1.0, q, 0.0)
+        room, v = solved(rows, p, 1.0)
+        assert room
+        assert np.hypot(*(v - p)) <= np.hypot(*(q - p)) + 1e-12
+        assert (rows[:, :2] @ v - rows[:, 2] <= 1e-12).all()
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(2, 12), st.floats(-3.0, 3.0),
+       st.sampled_from([0.0, 1e-3, 1e-9]), st.floats(0.0, 1.0), st.booleans())  # fmt: skip
+def test_concurrent_and_tangent_lines_are_the_cone_programs(seed, K, log_scale, spread, depth,
+                                                            tangent):  # fmt: skip
+    """Lines through one point q (anywhere in the disk, on its edge with ``depth`` 1), the
+    directions anywhere or nearly parallel; with ``tangent`` one more row ``a . v <= -r``
+    leaves the disk's one point -r a and the lines pass through it. Millimetres to kilometres:
+    room, every row met to 1e-12 r, and no further from p than clarabel's projection."""
+    rng = np.random.default_rng(seed)
+    r = 10.0**log_scale
+    angle = rng.uniform(0, 2 * np.pi)
+    edge = np.array([np.cos(angle), np.sin(angle)])
+    q = -r * edge if tangent else r * depth * edge
+    rows = concurrent(rng, K, r, q, spread)
+    if tangent:
+        rows = np.ascontiguousarray(np.vstack([[*edge, -r], rows])[rng.permutation(K + 1)])
+    p = rng.uniform(-2 * r, 2 * r, 2)
+    room, v = solved(rows, p, r)
+    assert room
+    assert np.hypot(*v) <= r * (1 + 1e-12)
+    assert (rows[:, :2] @ v - rows[:, 2] <= 1e-12 * r).all()
+    # q meets every row; the crossing of lines 1e-9 apart is known to about 1e-16 / 1e-9 r
+    slack = 1e-6 if spread == 1e-9 else 1e-12
+    assert np.hypot(*(v - p)) <= np.hypot(*(q - p)) + slack * r
+    if tangent:  # the disk's one point within the tangent row (a sliver of width 1e-13 r)
+        assert np.hypot(*(v - q)) <= 1e-6 * r
+        return
+    if spread == 1e-9:
+        # lines 1e-9 apart: a point 1e-9 r off every row can be r from the feasible set, and
+        # clarabel's tolerance admits such points; q is the bound above
+        return
+    # clarabel's point can violate the rows of these degenerate programs by 2e-8 r, which buys
+    # it up to about 1e-7 r^2 of distance
+    c = cone_program(rows, r, p)
+    assert np.sum((v - p) ** 2) <= np.sum((c - p) ** 2) + 1e-7 * r**2

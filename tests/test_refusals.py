@@ -192,3 +192,37 @@ def test_gamma_and_the_filter_keywords_are_reported_as_used_through_every_adapte
     assert used(env.unwrapped.parallel.unwrapped.sim).neighbor_radius == 50.0
     with pytest.raises(TypeError, match="need safety_filter=True"):
         wrappers.filtered_parallel_env("crowd", safety_filter=False, neighbor_radius=5.0)
+
+
+@pytest.mark.parametrize("dt", [1e-18, 1e-300, 5e-324])
+def test_a_dt_too_small_for_any_step_count_is_refused_by_name(dt):
+    """``dt`` that passes positivity but would make the deadlock window more steps than an
+    int64 count holds: a ValueError naming dt at construction (it was an OverflowError, or a
+    numba typing error, later)."""
+    with pytest.raises(ValueError, match=r"circular_swap\.dt = .* too small"):
+        rsvo_env.parallel_env("circular_swap", dt=dt)
+    env = rsvo_env.parallel_env("circular_swap", dt=2e-15)  # the smallest kept: it steps
+    env.reset(seed=0)
+    env.step(env.unwrapped.nominal_actions())
+
+
+@pytest.mark.parametrize("scenario", ["crowd", "doorway", "obstacle_field", "custom"])
+@pytest.mark.parametrize("model", ["double_integrator", "unicycle"])
+def test_scenes_take_a_model_instance_as_its_name(scenario, model):
+    """``dynamics=DoubleIntegrator()`` where a scene takes models by name: the same episode as
+    the name (it raised ValueError); an instance of a model the scene does not take, or not a
+    model at all, is refused naming the field."""
+    from rsvo_env import dynamics
+
+    scene = {"starts": [[0.0, 0.0], [4.0, 0.0]], "goals": [[4.0, 0.0], [0.0, 0.0]]}
+    kwargs = scene if scenario == "custom" else {}
+    runs = []
+    for given in (model, type(dynamics.MODELS[model])()):
+        env = BatchedEnv(scenario, num_envs=2, dynamics=given, **kwargs)
+        env.reset(seed=0)
+        for _ in range(5):
+            env.step(env.nominal_actions())
+        runs.append(env.sim.state.positions.copy())
+    np.testing.assert_array_equal(runs[0], runs[1])
+    with pytest.raises(ValueError, match=r"crowd\.dynamics"):
+        rsvo_env.parallel_env("crowd", dynamics=object())

@@ -296,3 +296,53 @@ def test_the_residual_settings_have_one_owner():
     assert residual_settings({}) == Residual()
     given = {"gate_radius": 0.25, "residual_scale": 2.0, "yield_radius": 1.25, "k": 3}
     assert residual_settings(given) == Residual(0.25, scale=2.0, yield_radius=1.25)
+
+
+@pytest.mark.parametrize("dynamics", ["single_integrator", "double_integrator", "unicycle"])
+def test_a_zero_residual_is_the_scripted_command_for_every_model(dynamics):
+    """Residual actions are residual for every model: a zero action asks for exactly the
+    scripted command (the unicycle's once ignored it and asked for (v, w) = (0, 0))."""
+    env = BatchedEnv("doorway", num_envs=2, num_agents=8, dynamics=dynamics, action="residual")
+    env.reset(seed=0)
+    for _ in range(20):
+        expect = env.sim.nominal_controls()
+        got = env.sim.to_controls(np.zeros((2, 8, 2)))
+        # the sum is held to the bound again, which may round a command at the bound
+        np.testing.assert_allclose(got, expect, rtol=1e-15, atol=0)
+        env.step(np.zeros((2, 8, 2)))
+
+
+def test_a_doorway_of_unicycles_behind_zero_residuals_gets_home():
+    """The doorway of 8 unicycles with residual actions of zero: every agent home (the unicycle
+    once took them as direct (v, w) commands and no agent moved)."""
+    env = BatchedEnv("doorway", num_envs=1, num_agents=8, dynamics="unicycle", action="residual")
+    env.reset(seed=0)
+    for _ in range(env.sim.max_steps):
+        _, _, terminated, truncated, info = env.step(np.zeros((1, 8, 2)))
+        if terminated[0] or truncated[0]:
+            break
+    assert info["episode_success"][0] and info["episode_arrived"][0] == 8
+
+
+LIMITED = dict(starts=[[0.0, 0.0], [10.0, 0.0]], goals=[[0.0, 10.0], [10.0, 10.0]])
+
+
+@pytest.mark.parametrize("dynamics,limit", [("single_integrator", "u_max"),
+                                            ("double_integrator", "a_max"),
+                                            ("unicycle", "u_max")])  # fmt: skip
+@pytest.mark.parametrize("action", ["residual", "direct"])
+def test_each_agent_is_held_to_its_own_limit(dynamics, limit, action):
+    """A scene with ``u_max`` (``a_max``) = (0.5, 2), filter off, action (1, 0) for both: the
+    first agent's input is held to 0.5 and the second may use 2 (the residual's sum was held to
+    the largest limit; the unicycle's forward speed ignored its own limit)."""
+    env = BatchedEnv("custom", num_envs=1, safety_filter=False, dynamics=dynamics,
+                     action=action, **{limit: [0.5, 2.0]}, **LIMITED)  # fmt: skip
+    env.reset(seed=0)
+    for _ in range(5):
+        u = env.sim.to_controls(np.array([[[1.0, 0.0], [1.0, 0.0]]]))[0]
+        size = np.abs(u[:, 0]) if dynamics == "unicycle" else np.hypot(u[:, 0], u[:, 1])
+        assert size[0] <= 0.5 * (1 + 1e-12)
+        assert size[1] > 0.5
+        env.step(np.array([[[1.0, 0.0], [1.0, 0.0]]]))
+    speed = np.hypot(*env.sim.state.velocities[0].T)
+    assert speed[0] <= 0.5 * (1 + 1e-12) or dynamics == "double_integrator"

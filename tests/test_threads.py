@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.qp import exact
 from rsvo_env.util import threads
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -27,7 +28,6 @@ def test_one_thread_unless_opted_in():
         with threads.using(2):
             assert threads.get_num_threads() == 2
             assert threads.parallel(threads.PARALLEL_THRESHOLD)
-            assert numba.get_num_threads() == 2
             assert not threads.parallel(threads.PARALLEL_THRESHOLD - 1)
     assert threads.get_num_threads() == int(os.environ.get(threads.ENV_VAR, "1"))
 
@@ -39,6 +39,23 @@ def test_bad_counts_are_refused_by_name_and_change_nothing(bad):
         threads.set_num_threads(bad)
     assert repr(bad) in str(err.value) or str(bad) in str(err.value)
     assert threads.get_num_threads() == before
+
+
+@pytest.mark.parametrize("caller", [1, POOL])
+def test_the_solver_puts_back_the_callers_numba_thread_count(caller):
+    """``exact.solve_batch`` over enough problems to run in parallel on 2 threads: numba's count
+    for the calling thread is the caller's after it (it was left at the library's)."""
+    rng = np.random.default_rng(0)
+    n = 4 * threads.PARALLEL_THRESHOLD
+    A, b = rng.normal(size=(n, 3, 2)), rng.normal(size=(n, 3))
+    before = numba.get_num_threads()
+    numba.set_num_threads(caller)
+    try:
+        with threads.using(min(2, POOL)):
+            exact.solve_batch(rng.normal(size=(n, 2)), A, b, np.ones((n, 3), bool), -1.0, 1.0)
+        assert numba.get_num_threads() == caller
+    finally:
+        numba.set_num_threads(before)
 
 
 def run(code: str, value: str) -> subprocess.CompletedProcess:

@@ -17,6 +17,7 @@ from rsvo_env.cli.scene_file import load_yaml
 from rsvo_env.control.residual import Residual
 from rsvo_env.envs.factory import FILTER_KEYWORDS
 from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.util.validation import shown, unknown_keywords
 from training import schema
 
 CONFIG_DIR = Path(__file__).parent / "configs"
@@ -64,10 +65,10 @@ def load(scenario: str | None = None, path: str | Path | None = None) -> dict[st
         path = CONFIG_DIR / f"{scenario}.yaml"
         if not path.exists():
             known = sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
-            raise ValueError(f"no config for scenario {scenario!r}; configs exist for {known}")
+            raise ValueError(f"no config for scenario {shown(scenario)}; configs exist for {known}")
     path = Path(path)
     if not path.is_file():
-        raise ValueError(f"config file {str(path)!r} does not exist")
+        raise ValueError(f"config file {shown(str(path))} does not exist")
     with open(path) as f:
         try:
             cfg = load_yaml(f)
@@ -81,14 +82,14 @@ def load(scenario: str | None = None, path: str | Path | None = None) -> dict[st
 def set_value(cfg: dict[str, Any], assignment: str) -> None:
     """Apply ``key.sub=value`` (the value parsed as YAML) to a config in place."""
     if "=" not in assignment:
-        raise ValueError(f"--set {assignment!r}: use key=value, e.g. env.num_agents=8")
+        raise ValueError(f"--set {shown(assignment)}: use key=value, e.g. env.num_agents=8")
     key, raw = assignment.split("=", 1)
     node = cfg
     *parents, leaf = key.split(".")
     for part in parents:
         node = node.setdefault(part, {})
         if not isinstance(node, dict):
-            raise ValueError(f"--set {assignment!r}: {part!r} is not a section")
+            raise ValueError(f"--set {shown(assignment)}: {shown(part)} is not a section")
     node[leaf] = load_yaml(raw)
 
 
@@ -104,16 +105,16 @@ def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
     out.setdefault("engine", "sb3")
     unknown = sorted(set(out) - set(TOP))
     if unknown:
-        raise ValueError(f"unknown config key(s) {unknown}; known: {sorted(TOP)}")
+        raise ValueError(unknown_keywords("the config", unknown, TOP))
     for key in ("scenario", "algo", "action", "weighting", "num_envs", "timesteps"):
         if key not in out:
-            raise ValueError(f"config has no {key!r}")
+            raise ValueError(f"config has no {shown(key)}")
     schema.section(TOP)(out, "")
     section = "rllib" if out["engine"] == "rllib" else SECTION[out["algo"]]
     if out["engine"] == "rllib" and out["algo"] != "ppo":
-        raise ValueError(f"config algo = {out['algo']!r}: the rllib engine trains ppo")
+        raise ValueError(f"config algo = {shown(out['algo'])}: the rllib engine trains ppo")
     if not isinstance(out.get(section), dict):
-        raise ValueError(f"config has no {section!r} section of hyperparameters")
+        raise ValueError(f"config has no {shown(section)} section of hyperparameters")
     if out["engine"] == "sb3":
         for algo in ("ppo", "sac"):
             if algo in out:
@@ -122,6 +123,11 @@ def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
     # build one env now: every scenario, filter and observation field is checked by the env
     # (gamma dt <= 1 by FilterConfig, its one owner)
     make_env(out, num_envs=1).close()
+    env = out["env"]
+    if env.get("safety_filter", True) is False and set(FILTER_KEYWORDS) & set(env):
+        # the filter's settings of a config that turns it off are still saved with the run:
+        # each is checked by the filter as if it were on
+        make_env({**out, "env": {**env, "safety_filter": True}}, num_envs=1).close()
     val = out.setdefault("validation", {})
     val.setdefault("every", 0)
     val.setdefault("episodes", 20)
@@ -146,7 +152,7 @@ def hyperparameters(cfg: dict[str, Any]) -> dict[str, Any]:
     if name is not None:
         if name not in ACTIVATIONS:
             raise ValueError(
-                f"config {cfg['algo']}.policy_kwargs.activation_fn = {name!r}; use one of "
+                f"config {cfg['algo']}.policy_kwargs.activation_fn = {shown(name)}; use one of "
                 f"{ACTIVATIONS}"
             )
         kwargs["activation_fn"] = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[name]

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from rsvo_env.cli.arguments import Parser, count, output_problem
+from rsvo_env.util.validation import shown
 from training import config as configs
 from training.algorithms import algorithm_class
 from training.config import make_env
@@ -45,7 +46,7 @@ def load_model(path: str | Path, overrides: Sequence[str] = ()) -> tuple[Any, di
     directory written by ``--engine rllib``."""
     path = Path(path)
     if not path.exists():
-        raise ValueError(f"model {str(path)!r} does not exist")
+        raise ValueError(f"model {shown(str(path))} does not exist")
     for folder in (path.parent, path.parent.parent):
         if (folder / "config.yaml").exists():
             cfg = configs.load(path=folder / "config.yaml")
@@ -54,7 +55,8 @@ def load_model(path: str | Path, overrides: Sequence[str] = ()) -> tuple[Any, di
             cfg = configs.resolve(cfg)
             break
     else:
-        raise ValueError(f"no config.yaml beside {str(path)!r}: was it written by training.train?")
+        raise ValueError(f"no config.yaml beside {shown(str(path))}: was it written by "
+                         f"training.train?")
     if (path / "learner_group").is_dir():
         from training.rllib_engine import load_module, module_policy
 

@@ -32,6 +32,8 @@ from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.utils import obs_as_tensor
 from torch import nn
 
+from rsvo_env.util.validation import shown
+
 
 @dataclass
 class Lagrange:
@@ -46,7 +48,7 @@ class Lagrange:
     def update(self, episode_cost: float) -> float:
         """One dual-ascent step on the mean episode cost ``J_c``; returns the new multiplier."""
         if not np.isfinite(episode_cost):
-            raise ValueError(f"Lagrange.update: episode_cost = {episode_cost!r} is not finite")
+            raise ValueError(f"Lagrange.update: episode_cost = {shown(episode_cost)} is not finite")
         self.multiplier = max(0.0, self.multiplier + self.lr * (episode_cost - self.cost_limit))
         return self.multiplier
 
@@ -214,4 +216,4 @@ def _append_row(path: str, timesteps: int, episode_cost: float, multiplier: floa
     with open(path, "a") as f:
         if new:
             f.write("timesteps,episode_cost,multiplier\n")
-        f.write(f"{int(timesteps)},{episode_cost!r},{multiplier!r}\n")
+        f.write(f"{int(timesteps)},{shown(episode_cost)},{shown(multiplier)}\n")

@@ -15,11 +15,13 @@ from typing import Any
 
 import numpy as np
 
+from rsvo_env.util.validation import shown, unknown_keywords
+
 Check = Callable[[Any, str], Any]
 
 
 def _fail(where: str, value: Any, what: str) -> ValueError:
-    return ValueError(f"config {where} = {value!r} must be {what}")
+    return ValueError(f"config {where} = {shown(value)} must be {what}")
 
 
 def integer(least: int) -> Check:
@@ -63,7 +65,7 @@ def text(value: Any, where: str) -> str:
 def choice(options: tuple[str, ...]) -> Check:
     def check(value: Any, where: str) -> str:
         if value not in options:
-            raise ValueError(f"config {where} = {value!r}; use one of {options}")
+            raise ValueError(f"config {where} = {shown(value)}; use one of {options}")
         return value
 
     return check
@@ -93,7 +95,7 @@ def section(fields: Mapping[str, Check]) -> Check:
         mapping(value, where)
         unknown = sorted(set(value) - set(fields))
         if unknown:
-            raise ValueError(f"config {where}: unknown key(s) {unknown}; known: {sorted(fields)}")
+            raise ValueError(unknown_keywords(f"config {where}:", unknown, fields))
         for key, sub in fields.items():
             if key in value:
                 sub(value[key], f"{where}.{key}" if where else key)
@@ -104,7 +106,7 @@ def section(fields: Mapping[str, Check]) -> Check:
 
 def mapping(value: Any, where: str) -> dict[str, Any]:
     if not isinstance(value, dict):
-        raise ValueError(f"config {where} = {value!r} must be a mapping (a section of keys)")
+        raise ValueError(f"config {where} = {shown(value)} must be a mapping (a section of keys)")
     return value
 
 

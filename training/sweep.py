@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from rsvo_env.cli.arguments import Parser, count
+from rsvo_env.util.validation import shown
 from training import config as configs
 from training import tune_runs
 
@@ -79,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
             configs.set_value(base, assignment)
         for w in args.weightings:
             if w not in configs.WEIGHTINGS:
-                raise ValueError(f"--weightings {w!r}; use {configs.WEIGHTINGS}")
+                raise ValueError(f"--weightings {shown(w)}; use {configs.WEIGHTINGS}")
         grid = [
             configs.resolve(
                 with_theta(base, theta),

@@ -26,7 +26,7 @@ import numpy as np
 
 from rsvo_env.cli.arguments import Parser, count
 from rsvo_env.envs.vector import BatchedEnv
-from rsvo_env.util.validation import check_positive
+from rsvo_env.util.validation import check_positive, shown
 from training import config as configs
 from training import tune_runs
 from training.personalities import FIELDS as STATS
@@ -38,7 +38,7 @@ def scenario_kwargs(scenario: str, assignments: list[str]) -> dict[str, Any]:
     kwargs = dict(PAPER_GAME) if scenario == "circular_swap" else {}
     for a in assignments:
         if "=" not in a:
-            raise ValueError(f"--set {a!r}: use key=value, e.g. num_agents=12")
+            raise ValueError(f"--set {shown(a)}: use key=value, e.g. num_agents=12")
         key, raw = a.split("=", 1)
         kwargs[key] = configs.load_yaml(raw)
     return kwargs

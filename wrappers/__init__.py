@@ -1,5 +1,6 @@
 """PettingZoo and Gymnasium wrappers around the rsvo_env core."""
 
+from rsvo_env.util.validation import shown
 from wrappers.gym_vector import GymnasiumVectorEnv
 from wrappers.joint import JointControlEnv
 from wrappers.residual import ResidualAction
@@ -23,4 +24,4 @@ def __getattr__(name: str):
         from wrappers.sb3 import SB3VecEnv
 
         return SB3VecEnv
-    raise AttributeError(f"module 'wrappers' has no attribute {name!r}")
+    raise AttributeError(f"module 'wrappers' has no attribute {shown(name)}")

@@ -20,6 +20,7 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.util.validation import shown
 
 MODES = {"same_step": AutoresetMode.SAME_STEP, "next_step": AutoresetMode.NEXT_STEP}
 
@@ -54,7 +55,7 @@ class GymnasiumVectorEnv(VectorEnv):
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         if isinstance(seed, (list, tuple)):
             raise ValueError(
-                f"seed = {seed!r}: give one int (env e is seeded with seed + e) or None; the "
+                f"seed = {shown(seed)}: give one int (env e is seeded with seed + e) or None; the "
                 "slots of an env share its seed"
             )
         obs, info = self.env.reset(seed=seed, options=options)

@@ -15,6 +15,7 @@ from typing import Any
 import gymnasium
 import numpy as np
 
+from rsvo_env.util.validation import shown
 from wrappers.safety_filter import filtered_parallel_env
 
 
@@ -87,7 +88,7 @@ class JointControlEnv(gymnasium.Env):
         if bad.any():
             i = int(np.argmax(bad))
             raise ValueError(
-                f"action of agent {self.agent_names[i]!r} (index {i}) = "
+                f"action of agent {shown(self.agent_names[i])} (index {i}) = "
                 f"{per_agent[i].tolist()} is not finite"
             )
         actions = {name: per_agent[i] for i, name in enumerate(self.agent_names)}

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from rsvo_env.util.validation import shown
 from wrappers.joint import JointControlEnv
 from wrappers.safety_filter import filtered_aec_env, filtered_parallel_env
 
@@ -14,9 +15,10 @@ def _scenario(id_scenario: str, kwargs: dict[str, Any]) -> str:
     given = kwargs.pop("scenario", id_scenario)
     if given != id_scenario:
         raise TypeError(
-            f"scenario = {given!r}: this id names the scenario {id_scenario!r}; for another, "
-            f"make that scenario's id, or wrappers.JointControlEnv({given!r}, ...) / "
-            f"rsvo_env.parallel_env({given!r}, ...)"
+            f"scenario = {shown(given)}: this id names the scenario {shown(id_scenario)}; for "
+            f"another, "
+            f"make that scenario's id, or wrappers.JointControlEnv({shown(given)}, ...) / "
+            f"rsvo_env.parallel_env({shown(given)}, ...)"
         )
     return id_scenario
 

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.util.validation import shown
 from wrappers.parallel_batch import ParallelBatch
 
 # Per-slot signals copied into every info (the filter's work and the collision cost).
@@ -39,7 +40,7 @@ class SB3VecEnv(VecEnv):
             # SB3 resets an env on the step it ends and reads its last observation from
             # ``terminal_observation``; a next-step env has ended one step before it says so
             raise ValueError(
-                f"SB3VecEnv: the BatchedEnv's autoreset_mode = {venv.autoreset_mode!r}; SB3 "
+                f"SB3VecEnv: the BatchedEnv's autoreset_mode = {shown(venv.autoreset_mode)}; SB3 "
                 "resets an env on the step it ends (terminal_observation): make it with "
                 "autoreset_mode='same_step' (the default)"
             )

@@ -13,6 +13,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import NoReturn
 
+from rsvo_env.util.validation import shown
+
 
 def count(least: int) -> Callable[[str], int]:
     """An argparse type: an integer >= ``least`` (seeds: 0, episode counts: 1)."""
@@ -21,7 +23,7 @@ def count(least: int) -> Callable[[str], int]:
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"invalid int value: {text!r}") from None
+            raise argparse.ArgumentTypeError(f"invalid int value: {shown(text)}") from None
         if value < least:
             raise argparse.ArgumentTypeError(f"{value} must be an integer >= {least}")
         return value

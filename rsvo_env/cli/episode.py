@@ -54,6 +54,7 @@ def run(
     out["goals"] = base.world.goals.copy()
     out["obstacles"] = base.world.obstacles.copy()
     out["safety_radius"] = base.world.safety_radius
+    out["weighting"], out["filtered"] = weighting, bool(safety_filter)
     if gif:
         fps = max(1, int(round(1.0 / (base.dt * gif_every))))
         out["gif"] = save_gif(frames, gif, fps=min(fps, 50))

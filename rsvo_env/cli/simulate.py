@@ -20,6 +20,35 @@ from rsvo_env.cli.arguments import Parser, UserError, check_output, count, user_
 from rsvo_env.cli.episode import run
 from rsvo_env.cli.scene_file import read_scene
 from rsvo_env.scenarios.base import NOMINALS
+from rsvo_env.util.validation import check_flag, check_seed
+
+# the run's own settings a scene file may hold too, and the flag that sets each
+RUN_FLAGS = {"theta": "--theta", "weighting": "--weighting", "seed": "--seed",
+             "safety_filter": "--no-filter"}  # fmt: skip
+
+
+def run_settings(args: argparse.Namespace, scene: dict[str, Any]) -> dict[str, Any]:
+    """The run's settings (``RUN_FLAGS``) from the command line or the scene file, each taken
+    out of ``scene``; one given in both is refused, and a scene file's values are checked as
+    the flags' are (``UserError`` naming the field)."""
+    flags = {
+        "theta": args.theta,
+        "weighting": getattr(args, "weighting", None),
+        "seed": getattr(args, "seed", None),
+        "safety_filter": False if args.no_filter else None,
+    }
+    for key, flag in RUN_FLAGS.items():
+        if key in scene:
+            if flags[key] is not None:
+                raise UserError(f"{key} is given twice: {flag} and the scene file's {key}")
+            flags[key] = scene.pop(key)
+    with user_input():
+        seed = check_seed(0 if flags["seed"] is None else flags["seed"], "seed")
+        safety_filter = check_flag(True if flags["safety_filter"] is None else
+                                   flags["safety_filter"], "safety_filter")  # fmt: skip
+    weighting = "asymmetric" if flags["weighting"] is None else flags["weighting"]
+    return {"theta": flags["theta"], "weighting": weighting, "seed": seed,
+            "safety_filter": safety_filter}  # fmt: skip
 
 
 class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
@@ -42,9 +71,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-filter", action="store_true", help="run without the safety filter")
     ap.add_argument(
         "--weighting",
-        default="asymmetric",
+        default=argparse.SUPPRESS,
         choices=["asymmetric", "symmetric"],
-        help="asymmetric: the paper's R-SVO weights; symmetric: 0.5 for every pair",
+        help="asymmetric: the paper's R-SVO weights; symmetric: 0.5 for every pair "
+        "(default: asymmetric)",
     )
     ap.add_argument(
         "--nominal",
@@ -58,7 +88,8 @@ def main(argv: list[str] | None = None) -> int:
         help="custom: your scene, a YAML or JSON mapping of its keywords (starts, goals, radii, "
         "circles, walls, thickness, dynamics, u_max, a_max, ...; docs/scenarios.md)",
     )
-    ap.add_argument("--seed", type=count(0), default=0, help="seed of the episode")
+    ap.add_argument("--seed", type=count(0), default=argparse.SUPPRESS,
+                    help="seed of the episode (default: 0)")  # fmt: skip
     ap.add_argument("--gif", type=Path, help="write an animated GIF here (.gif)")
     ap.add_argument("--png", type=Path, help="write a trajectory figure here (.png)")
     args = ap.parse_args(argv)
@@ -73,16 +104,8 @@ def main(argv: list[str] | None = None) -> int:
             scene = read_scene(args.scene)
         if "nominal" in scene and args.nominal is not None:
             raise UserError("the controller is given twice: --nominal and the scene's nominal")
-    out = run(
-        args.scenario,
-        safety_filter=not args.no_filter,
-        weighting=args.weighting,
-        theta=args.theta,
-        seed=args.seed,
-        gif=args.gif,
-        **({} if args.nominal is None else {"nominal": args.nominal}),
-        **scene,
-    )
+    out = run(args.scenario, gif=args.gif, **run_settings(args, scene),
+              **({} if args.nominal is None else {"nominal": args.nominal}), **scene)  # fmt: skip
     for key in (
         "steps",
         "success",
@@ -101,8 +124,8 @@ def main(argv: list[str] | None = None) -> int:
 
         from rsvo_env.cli.figures import episode
 
-        fig = episode(out, args.scenario, args.weighting, filtered=not args.no_filter)
+        fig = episode(out, args.scenario, out["weighting"], filtered=out["filtered"])
         fig.savefig(args.png, dpi=120, bbox_inches="tight")
         plt.close(fig)
         print(f"{'png':>18}: {args.png}")
-    return 0 if out["n_collision_steps"] == 0 or args.no_filter else 1
+    return 0 if out["n_collision_steps"] == 0 or not out["filtered"] else 1

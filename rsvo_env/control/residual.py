@@ -1,10 +1,11 @@
 """Residual actions: a learner's action is a correction added to the scripted nominal command.
 
-The residual (its norm clipped to 1, times ``scale`` u_max) is added to the scenario's nominal
-command (with or without the right-hand rule) and the sum is held to the speed limit, like every
-other command; the safety filter, when on, filters the sum. The residual is gated off within
-``gate_radius`` of the agent's goal, where the scripted controller alone brings the agent inside
-the goal tolerance and holds it there.
+The residual (the action mapped to the model's inputs as any action is: for a planar model its
+norm clipped to 1 times the agent's limit, for the unicycle (v, w) within its bounds; then times
+``scale``) is added to the scenario's nominal command (with or without the right-hand rule) and
+the sum is held to each agent's own bounds, like every other command; the safety filter, when
+on, filters the sum. The residual is gated off within ``gate_radius`` of the agent's goal, where
+the scripted controller alone brings the agent inside the goal tolerance and holds it there.
 
 A parked agent is a fixed obstacle to the others: the filter only ever slows an agent, never
 pushes one aside, so a goal behind parked agents cannot be reached. With ``yield_radius`` the
@@ -27,6 +28,7 @@ the deadlock signal reads.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,7 +37,7 @@ from numpy.typing import NDArray
 
 from rsvo_env.control import stall
 from rsvo_env.util import grid, planar
-from rsvo_env.util.validation import check_flag, check_positive, check_real
+from rsvo_env.util.validation import check_flag, check_positive, check_real, shown
 
 
 @dataclass(frozen=True)
@@ -56,7 +58,7 @@ class Residual:
     def __post_init__(self) -> None:
         gate = check_real(self.gate_radius, "gate_radius")
         if gate < 0:
-            raise ValueError(f"gate_radius = {self.gate_radius!r} must be >= 0")
+            raise ValueError(f"gate_radius = {shown(self.gate_radius)} must be >= 0")
         object.__setattr__(self, "gate_radius", gate)
         object.__setattr__(self, "scale", check_positive(self.scale, "residual scale"))
         object.__setattr__(self, "right_hand", check_flag(self.right_hand, "right_hand"))
@@ -111,14 +113,19 @@ class Residual:
         return on
 
     def controls(
-        self, scenario: Any, state: Any, residual: NDArray[np.float64], u_max: float
+        self,
+        scenario: Any,
+        state: Any,
+        residual: NDArray[np.float64],
+        hold: Callable[[NDArray[np.float64]], NDArray[np.float64]],
     ) -> NDArray[np.float64]:
-        """The controls (E, N, 2): the scripted command plus the gated residual (physical,
-        world frame, norm <= u_max), held to ``u_max``."""
+        """The controls (E, N, 2): the scripted command plus the gated ``residual`` (the model's
+        inputs, as the action maps to them), the sum held to each agent's bounds by ``hold``
+        (``Dynamics.hold``)."""
         on = self.acting(scenario, state)
         nominal = scenario.nominal(state, self.right_hand)
         gated = np.where(on[..., None], self.scale * residual, 0.0)
-        return planar.clip_norm(nominal + gated, u_max)
+        return hold(nominal + gated)
 
 
 # BatchedEnv's (and the training configs') keyword for each setting of Residual

@@ -20,12 +20,29 @@ from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env.util import planar
-from rsvo_env.util.validation import check_count
+from rsvo_env.util.validation import check_count, shown
 
 PROGRESS = 0.02  # safety radii closer to the goal that count as progress
 # an agent short of its goal that has made no progress for this long is deadlocked
 # (docs/metrics.md): longer than any wait for a neighbour to pass at the crowds' speeds
 DEADLOCK_SECONDS = 10.0
+
+
+# the most steps a duration may last: step counts are int64 in the compiled stages, and every
+# count up to 2**53 is exact in a float
+MAX_STEPS = 2**53
+
+
+def check_dt(dt: float, name: str) -> float:
+    """``dt`` (already checked finite and > 0) refused where the deadlock window,
+    ``DEADLOCK_SECONDS``, would last more than ``MAX_STEPS`` steps: no step count of the env
+    could hold it (``ValueError`` naming ``name``)."""
+    if DEADLOCK_SECONDS / dt > MAX_STEPS:
+        raise ValueError(
+            f"{name} = {shown(dt)} is too small: the deadlock window of {DEADLOCK_SECONDS} s would "
+            f"last more than 2**53 steps (dt >= {DEADLOCK_SECONDS / MAX_STEPS:.3g} s)"
+        )
+    return dt
 
 
 def deadlock_steps(dt: float) -> int:

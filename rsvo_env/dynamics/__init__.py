@@ -7,6 +7,7 @@ from rsvo_env.dynamics.double_integrator import DoubleIntegrator, double_integra
 from rsvo_env.dynamics.model import Dynamics
 from rsvo_env.dynamics.single_integrator import SingleIntegrator, single_integrator_step
 from rsvo_env.dynamics.unicycle import Unicycle, unicycle_step
+from rsvo_env.util.validation import shown
 
 MODELS: dict[str, Dynamics] = {
     m.name: m for m in (SingleIntegrator(), DoubleIntegrator(), Unicycle())
@@ -34,4 +35,5 @@ def get(model: str | Dynamics, field: str = "dynamics") -> Dynamics:
         return model
     if isinstance(model, str) and model in MODELS:
         return MODELS[model]
-    raise ValueError(f"{field} = {model!r} is unknown; use one of {NAMES} or a Dynamics instance")
+    raise ValueError(f"{field} = {shown(model)} is unknown; use one of {NAMES} or a Dynamics "
+                     f"instance")

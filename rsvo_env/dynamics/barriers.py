@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from rsvo_env.dynamics.sampled import sampled_braking_rhs
 from rsvo_env.qp.rows import PairFlags, Rows, finish, support
+from rsvo_env.util.validation import shown
 
 __all__ = ["Rows", "support"]
 
@@ -257,11 +258,11 @@ def double_integrator_rows(
     gamma, safety_radius, lo, hi, barrier, split, gamma2, dt = spec
     if barrier not in ("braking", "hocbf"):
         raise ValueError(
-            f"barrier {barrier!r} has no pair rows here; use 'braking' or 'hocbf' "
+            f"barrier {shown(barrier)} has no pair rows here; use 'braking' or 'hocbf' "
             "('segment', 'backup': their modules' rows)"
         )
     if split not in SPLITS:
-        raise ValueError(f"split {split!r} is unknown; use one of {SPLITS}")
+        raise ValueError(f"split {shown(split)} is unknown; use one of {SPLITS}")
     n = positions.shape[0]
     dp = positions[I] - positions[J]
     dv = velocities[I] - velocities[J]

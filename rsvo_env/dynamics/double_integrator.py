@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 
 from rsvo_env.dynamics.model import Dynamics
 from rsvo_env.util.planar import clip_each, norm
+from rsvo_env.util.validation import shown
 
 if TYPE_CHECKING:
     from rsvo_env.qp.rows import Rows
@@ -36,8 +37,9 @@ def check_sampled_pairs(dt: float, bodies: Any, I: NDArray, J: NDArray) -> None:
     if bad.any():
         k = int(np.argmax(bad))
         raise ValueError(
-            f"agents {int(I[k])} and {int(J[k])}: dt^2 (A / 2 + U) = {dt * dt * reach[k]!r} >= "
-            f"r_i + r_j = {Ds[k]!r}: the sampled-data guarantee of the braking barrier needs "
+            f"agents {int(I[k])} and {int(J[k])}: dt^2 (A / 2 + U) = "
+            f"{shown(dt * dt * reach[k])} >= "
+            f"r_i + r_j = {shown(Ds[k])}: the sampled-data guarantee of the braking barrier needs "
             "dt^2 (A / 2 + U) < r_i + r_j (docs/double_integrator.md)"
         )
 
@@ -100,7 +102,7 @@ class DoubleIntegrator(Dynamics):
         if not ((lo < 0).all() and (hi > 0).all()):
             raise ValueError(
                 f"FilterConfig: the {cfg.barrier} barrier needs u_min < 0 < u_max, got "
-                f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
+                f"u_min = {shown(lo.tolist())}, u_max = {shown(hi.tolist())}"
             )
         if cfg.barrier in BACKED:  # exact in sampled time at any dt
             return
@@ -111,8 +113,8 @@ class DoubleIntegrator(Dynamics):
             # the sampled-data row divides by the gap at the next sample, which h >= 0 keeps
             # above safety_radius - dt^2 (a_max + |U|) (docs/double_integrator.md)
             raise ValueError(
-                f"FilterConfig: dt^2 (a_max + |u_max|) = {cfg.dt**2 * reach!r} >= "
-                f"safety_radius = {cfg.safety_radius!r}: the sampled-data guarantee of the "
+                f"FilterConfig: dt^2 (a_max + |u_max|) = {shown(cfg.dt**2 * reach)} >= "
+                f"safety_radius = {shown(cfg.safety_radius)}: the sampled-data guarantee of the "
                 "braking barrier needs dt^2 (a_max + |u_max|) < safety_radius"
             )
 
@@ -165,8 +167,9 @@ class DoubleIntegrator(Dynamics):
             Ds = float(bodies.radii.min()) + float(capsules[..., 4].min())
             if cfg.dt**2 * reach >= Ds:
                 raise ValueError(
-                    f"an obstacle's safe distance r + rho = {Ds!r} <= dt^2 (a_max + |u_max|) = "
-                    f"{cfg.dt**2 * reach!r}: the sampled-data guarantee needs it larger"
+                    f"an obstacle's safe distance r + rho = {shown(Ds)} <= dt^2 (a_max + "
+                    f"|u_max|) = "
+                    f"{shown(cfg.dt**2 * reach)}: the sampled-data guarantee needs it larger"
                 )
         return double_integrator_obstacle_rows(cfg, positions, velocities, bodies, capsules, n)
 

@@ -16,6 +16,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from rsvo_env.util.planar import clip_each, clip_norm
+
 if TYPE_CHECKING:
     from rsvo_env.geometry.bodies import Bodies
     from rsvo_env.qp.rows import Rows
@@ -111,18 +113,35 @@ class Dynamics:
         state.positions, state.velocities = self.step(state.positions, state.velocities, u, dt)
 
     def to_controls(
-        self, actions: NDArray, params: dict[str, Any], planar: Callable[[NDArray], NDArray]
+        self,
+        actions: NDArray,
+        params: dict[str, Any],
+        planar: Callable[[NDArray], NDArray],
+        limits: NDArray | None,
     ) -> NDArray:
         """Normalised actions to the model's inputs: ``planar`` (the core's map of planar
-        actions: the norm clipped to 1, times the limit, out of the goal frame, the residual
-        added) unless the model's actions are of its own."""
+        actions: the norm clipped to 1, times each agent's limit, out of the goal frame) unless
+        the model's actions are of its own; ``limits`` (N,) each agent's input bound, or None
+        (every agent has the scenario's)."""
         return planar(actions)
 
     def to_actions(
-        self, controls: NDArray, params: dict[str, Any], planar: Callable[[NDArray], NDArray]
+        self,
+        controls: NDArray,
+        params: dict[str, Any],
+        planar: Callable[[NDArray], NDArray],
+        limits: NDArray | None,
     ) -> NDArray:
         """The inverse of :meth:`to_controls` (no clipping)."""
         return planar(controls)
+
+    def hold(self, controls: NDArray, params: dict[str, Any], limits: NDArray | None) -> NDArray:
+        """Inputs (..., N, 2) held to each agent's bound, as :meth:`to_controls` holds an action
+        (a residual's sum with the scripted command goes through it): the norm clipped to the
+        scenario's limit, or to each agent's ``limits`` (N,)."""
+        if limits is None:
+            return clip_norm(controls, params[self.limit_name])
+        return clip_each(controls, limits)
 
     def filter_state(
         self,

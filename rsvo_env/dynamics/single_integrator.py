@@ -9,6 +9,7 @@ from numpy.typing import NDArray
 
 from rsvo_env.dynamics.model import Dynamics
 from rsvo_env.util.planar import clip_each
+from rsvo_env.util.validation import shown
 
 if TYPE_CHECKING:
     from rsvo_env.qp.rows import Rows
@@ -46,7 +47,7 @@ class SingleIntegrator(Dynamics):
             # in the safe set can have no safe action
             raise ValueError(
                 f"FilterConfig: the single-integrator box must contain 0 (u_min <= 0 <= u_max), "
-                f"got u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
+                f"got u_min = {shown(lo.tolist())}, u_max = {shown(hi.tolist())}"
             )
 
     def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:

@@ -23,7 +23,7 @@ from rsvo_env.dynamics.model import Dynamics
 from rsvo_env.dynamics.single_integrator import SingleIntegrator
 from rsvo_env.geometry.bodies import Bodies
 from rsvo_env.util.planar import turn
-from rsvo_env.util.validation import real_array
+from rsvo_env.util.validation import real_array, shown
 
 if TYPE_CHECKING:
     from rsvo_env.util.settings import FilterSettings
@@ -73,8 +73,9 @@ class Unicycle(Dynamics):
     def check_scenario(self, params, name):
         if params["lookahead"] * params["w_max"] >= params["u_max"]:
             raise ValueError(
-                f"{name}: lookahead * w_max = {params['lookahead'] * params['w_max']!r} must be "
-                f"below u_max = {params['u_max']!r} (the forward speed limit)"
+                f"{name}: lookahead * w_max = {shown(params['lookahead'] * params['w_max'])} "
+                f"must be "
+                f"below u_max = {shown(params['u_max'])} (the forward speed limit)"
             )
 
     def body_margin(self, params):
@@ -122,12 +123,13 @@ class Unicycle(Dynamics):
         if not (lo[0] <= 0.0 <= hi[0]):
             raise ValueError(
                 f"FilterConfig: the unicycle must be able to stop, v_min <= 0 <= v_max "
-                f"(u_min <= 0 <= u_max), got v_min = {lo[0]!r}, v_max = {hi[0]!r}"
+                f"(u_min <= 0 <= u_max), got v_min = {shown(lo[0])}, v_max = {shown(hi[0])}"
             )
         if cfg.lookahead * cfg.w_max >= hi[0]:
             raise ValueError(
-                f"FilterConfig: lookahead * w_max = {cfg.lookahead * cfg.w_max!r} must be below "
-                f"v_max = {hi[0]!r} (the look-ahead point's speed bounds the forward speed)"
+                f"FilterConfig: lookahead * w_max = {shown(cfg.lookahead * cfg.w_max)} must be "
+                f"below "
+                f"v_max = {shown(hi[0])} (the look-ahead point's speed bounds the forward speed)"
             )
 
     def box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> tuple[NDArray, NDArray]:
@@ -146,7 +148,8 @@ class Unicycle(Dynamics):
         if slow.any():
             i = int(np.argmax(slow))
             raise ValueError(
-                f"u_max[{i}] = {float(u_max[i])!r} must be above lookahead * w_max = {b!r} "
+                f"u_max[{i}] = {shown(float(u_max[i]))} must be above lookahead * w_max = "
+                f"{shown(b)} "
                 f"(agent {i}: the look-ahead point's speed bounds the forward speed)"
             )
         v_hi = np.sqrt(u_max * u_max - b * b)
@@ -218,16 +221,24 @@ class Unicycle(Dynamics):
         state.steered_velocities = (state.positions + l * heading_vectors(state.headings)
                                     - q_before) / dt  # fmt: skip
 
-    def to_controls(self, actions, params, planar):
+    def to_controls(self, actions, params, planar, limits):
         """Normalised actions in [-1, 1]^2 to (v, w): ``(a_0 v_max, a_1 w_max)``, each
-        component clipped to [-1, 1] first (the action's own frame is the body's)."""
+        component clipped to [-1, 1] first (the action's own frame is the body's); ``v_max``
+        each agent's own where ``limits`` (N,) are given."""
         a = np.clip(actions, -1.0, 1.0)
-        return np.stack([a[..., 0] * params["u_max"], a[..., 1] * params["w_max"]], -1)
+        return np.stack([a[..., 0] * _v_max(params, limits), a[..., 1] * params["w_max"]], -1)
 
-    def to_actions(self, controls, params, planar):
+    def to_actions(self, controls, params, planar, limits):
         """The inverse of :meth:`to_controls` (no clipping)."""
-        return np.stack([controls[..., 0] / params["u_max"], controls[..., 1] / params["w_max"]],
-                        -1)  # fmt: skip
+        return np.stack([controls[..., 0] / _v_max(params, limits),
+                         controls[..., 1] / params["w_max"]], -1)  # fmt: skip
+
+    def hold(self, controls, params, limits):
+        """(v, w) held to ``|v| <= v_max`` (each agent's own) and ``|w| <= w_max``, the range of
+        :meth:`to_controls`."""
+        v_max, w_max = _v_max(params, limits), params["w_max"]
+        return np.stack([np.clip(controls[..., 0], -v_max, v_max),
+                         np.clip(controls[..., 1], -w_max, w_max)], -1)  # fmt: skip
 
     def global_fields(self):
         return (("heading", -np.pi, np.pi),)
@@ -253,6 +264,11 @@ class Unicycle(Dynamics):
         return speed * horizon + 2.0 * l, 2.0 * speed
 
 
+def _v_max(params: dict[str, Any], limits: NDArray | None) -> float | NDArray:
+    """The forward speed bound: the scenario's ``u_max``, or each agent's (N,)."""
+    return params["u_max"] if limits is None else limits
+
+
 def rotate_rows(A: NDArray, owner: NDArray, rotation: NDArray) -> NDArray[np.float64]:
     """Rows ``A . c <= b`` on world velocities as rows on body-frame inputs, ``c = R c_b``:
     ``A R(theta_owner)``; ``rotation`` (M, 2) each agent's (cos, sin)."""
@@ -273,7 +289,8 @@ def check_headings(headings: ArrayLike | None, shape: tuple[int, ...], model: st
     if not np.isfinite(hd).all():
         idx = tuple(int(k) for k in np.argwhere(~np.isfinite(hd))[0])
         where = "".join(f"[{k}]" for k in idx)
-        raise ValueError(f"headings{where} = {float(hd[idx])!r} is not finite (agent {idx[-1]})")
+        raise ValueError(f"headings{where} = {shown(float(hd[idx]))} is not finite (agent "
+                         f"{idx[-1]})")
     return hd
 
 

@@ -32,6 +32,7 @@ from rsvo_env.util.validation import (
     check_count,
     check_flag,
     check_seed,
+    shown,
 )
 
 
@@ -95,7 +96,7 @@ class RSVOParallelEnv(ParallelEnv):
         record_series = check_flag(record_series, "record_series")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
-                f"render_mode = {render_mode!r}; use one of {self.metadata['render_modes']}"
+                f"render_mode = {shown(render_mode)}; use one of {self.metadata['render_modes']}"
             )
         self.sim = make_simulator(scenario, num_envs=1, record_series=record_series, **kwargs)
         self.scenario = self.sim.scenario
@@ -291,7 +292,7 @@ class RSVOParallelEnv(ParallelEnv):
     def __repr__(self) -> str:
         filters = ", ".join(f"gamma={f.config.gamma:g} {f.config.solver}" for f in self.sim.filters)
         return (
-            f"RSVOParallelEnv({self.scenario.name!r}, num_agents={self.sim.n}, "
+            f"RSVOParallelEnv({shown(self.scenario.name)}, num_agents={self.sim.n}, "
             f"filter={'[' + filters + ']' if filters else 'off'})"
         )
 

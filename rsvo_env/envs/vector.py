@@ -20,7 +20,7 @@ from rsvo_env.envs.factory import filter_config, make_simulator, route
 from rsvo_env.filter.safety import SafetyFilter
 from rsvo_env.responsibility.svo import Weighting
 from rsvo_env.scenarios import Scenario
-from rsvo_env.util.validation import check_flag, check_seed, check_vectors
+from rsvo_env.util.validation import check_flag, check_seed, check_vectors, shown
 
 AUTORESET_MODES = ("same_step", "next_step")
 
@@ -91,9 +91,10 @@ class BatchedEnv:
         safety_filter = check_flag(safety_filter, "safety_filter")
         filter_kwargs = route(safety_filter, kwargs)
         if action not in ("direct", "residual"):
-            raise ValueError(f"action = {action!r}; use 'direct' or 'residual'")
+            raise ValueError(f"action = {shown(action)}; use 'direct' or 'residual'")
         if autoreset_mode not in AUTORESET_MODES:
-            raise ValueError(f"autoreset_mode = {autoreset_mode!r}; use one of {AUTORESET_MODES}")
+            raise ValueError(f"autoreset_mode = {shown(autoreset_mode)}; use one of "
+                             f"{AUTORESET_MODES}")
         self.autoreset_mode = autoreset_mode
         # checked whatever the action mode: a bad value is refused, not ignored
         residual = Residual(

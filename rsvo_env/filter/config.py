@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from rsvo_env import dynamics as models
 from rsvo_env.dynamics import barriers
 from rsvo_env.responsibility.svo import WEIGHTING_MODES, Weighting
-from rsvo_env.util.validation import real_array
+from rsvo_env.util.validation import real_array, shown
 
 DYNAMICS = models.NAMES
 
@@ -70,7 +70,8 @@ class FilterConfig:
             except (TypeError, ValueError):
                 ok = False
             if not ok:
-                raise ValueError(f"FilterConfig.{name} = {value!r} must be a finite number > 0")
+                raise ValueError(f"FilterConfig.{name} = {shown(value)} must be a finite "
+                                 f"number > 0")
 
         # the model (a name or an instance); ``dynamics`` keeps its name, as reported
         model = models.get(self.dynamics, "FilterConfig.dynamics")
@@ -85,7 +86,7 @@ class FilterConfig:
             if self.gamma * self.dt > 1.0:
                 raise ValueError(
                     f"FilterConfig.gamma * dt = {self.gamma} * {self.dt} = "
-                    f"{self.gamma * self.dt!r} > 1: the discrete step is then no longer "
+                    f"{shown(self.gamma * self.dt)} > 1: the discrete step is then no longer "
                     "guaranteed safe (need gamma * dt <= 1)"
                 )
         if self.neighbor_radius is not None:
@@ -98,7 +99,7 @@ class FilterConfig:
         if not (np.isfinite(lo).all() and np.isfinite(hi).all()) or not (lo < hi).all():
             raise ValueError(
                 f"FilterConfig needs finite u_min < u_max per component, got "
-                f"u_min = {lo.tolist()!r}, u_max = {hi.tolist()!r}"
+                f"u_min = {shown(lo.tolist())}, u_max = {shown(hi.tolist())}"
             )
         model.check_box(self, lo, hi)
         lo, hi = model.box(self, lo, hi)
@@ -106,17 +107,19 @@ class FilterConfig:
         object.__setattr__(self, "hi", hi)
         if not callable(self.weighting) and self.weighting not in WEIGHTING_MODES:
             raise ValueError(
-                f"FilterConfig.weighting = {self.weighting!r}; use one of {WEIGHTING_MODES} "
+                f"FilterConfig.weighting = {shown(self.weighting)}; use one of {WEIGHTING_MODES} "
                 "or a callable theta -> omega matrix"
             )
         if self.barrier not in barriers.BARRIERS:
             raise ValueError(
-                f"FilterConfig.barrier = {self.barrier!r}; use one of {barriers.BARRIERS}"
+                f"FilterConfig.barrier = {shown(self.barrier)}; use one of {barriers.BARRIERS}"
             )
         if self.split not in barriers.SPLITS:
-            raise ValueError(f"FilterConfig.split = {self.split!r}; use one of {barriers.SPLITS}")
+            raise ValueError(f"FilterConfig.split = {shown(self.split)}; use one of "
+                             f"{barriers.SPLITS}")
         if self.solver != "exact" and self.solver not in qpsolvers.available_solvers:
             raise ValueError(
-                f"FilterConfig.solver = {self.solver!r}; use 'exact' or an installed qpsolvers "
+                f"FilterConfig.solver = {shown(self.solver)}; use 'exact' or an installed "
+                f"qpsolvers "
                 f"solver: {sorted(qpsolvers.available_solvers)}"
             )

@@ -9,6 +9,7 @@ from numpy.typing import ArrayLike, NDArray
 from rsvo_env.filter.config import FilterConfig
 from rsvo_env.geometry.bodies import Bodies, check_per_agent
 from rsvo_env.geometry.obstacles import Obstacles
+from rsvo_env.util.validation import shown
 
 
 def check_bodies(
@@ -31,7 +32,7 @@ def check_bodies(
     if u_max is not None and cfg.u_min is not None:
         raise ValueError(
             "u_max per agent gives each agent the box [-u_max_i, u_max_i]; it cannot be "
-            f"combined with FilterConfig.u_min = {cfg.u_min!r}"
+            f"combined with FilterConfig.u_min = {shown(cfg.u_min)}"
         )
     shape = (*lead, n)
     r = None if radii is None else check_per_agent(radii, "radii", shape)
@@ -46,7 +47,7 @@ def check_obstacles(obstacles: Obstacles | None, lead: tuple[int, ...]) -> NDArr
         return None
     if not isinstance(obstacles, Obstacles):
         raise ValueError(
-            f"obstacles = {obstacles!r}: pass an Obstacles (Obstacles.of(circles=, walls=, "
+            f"obstacles = {shown(obstacles)}: pass an Obstacles (Obstacles.of(circles=, walls=, "
             "thickness=))"
         )
     caps = obstacles.capsules

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rsvo_env.util.validation import real_array
+from rsvo_env.util.validation import real_array, shown
 
 if TYPE_CHECKING:
     from rsvo_env.util.settings import FilterSettings
@@ -33,7 +33,7 @@ def check_per_agent(values: ArrayLike, name: str, lead: tuple[int, ...]) -> NDAr
         env = f"env {idx[0]}, " if len(idx) == 2 else ""
         where = "".join(f"[{k}]" for k in idx)
         raise ValueError(
-            f"{name}{where} = {float(arr[idx])!r} must be a finite number > 0 "
+            f"{name}{where} = {shown(float(arr[idx]))} must be a finite number > 0 "
             f"({env}agent {idx[-1]})"
         )
     return arr

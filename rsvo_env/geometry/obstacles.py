@@ -19,7 +19,7 @@ from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env.qp.rows import storage, support
-from rsvo_env.util.validation import real_array
+from rsvo_env.util.validation import real_array, shown
 
 
 def _table(values: ArrayLike | None, name: str, width: int, what: str) -> NDArray[np.float64]:
@@ -60,7 +60,7 @@ class Obstacles:
         if bad.any():
             k = int(np.argmax(bad))
             raise ValueError(
-                f"circles[{k}] has radius {float(c[k, 2])!r}: an obstacle's radius must be > 0"
+                f"circles[{k}] has radius {shown(float(c[k, 2]))}: an obstacle's radius must be > 0"
             )
         w = _table(walls, "walls", 4, "((x0, y0), (x1, y1))")
         t = real_array(thickness, "thickness")
@@ -70,7 +70,8 @@ class Obstacles:
         bad = ~np.isfinite(t) | (t < 0)
         if bad.any():
             k = int(np.argmax(bad))
-            raise ValueError(f"thickness[{k}] = {float(t[k])!r} must be finite and >= 0 (wall {k})")
+            raise ValueError(f"thickness[{k}] = {shown(float(t[k]))} must be finite and >= 0 "
+                             f"(wall {k})")
         caps = np.concatenate(
             [np.c_[c[:, :2], c[:, :2], c[:, 2]], np.c_[w, 0.5 * t]], axis=0
         ).reshape(-1, 5)

@@ -26,20 +26,30 @@ import numpy as np
 from numba import njit
 
 PARALLEL = 1e-13
+# a chord that rounds to a point is kept if no row is violated by more than ROOM r there
+ROOM = 1e-13
 
 
 @njit(cache=True, inline="always")
 def _on_line(rows, k, r, px, py, toward):
     """The point of row k's line within the disk and the rows before k closest to (px, py)
-    (``toward`` False), or furthest along the direction (px, py) (``toward`` True): (x, y, ok)."""
+    (``toward`` False), or furthest along the direction (px, py) (``toward`` True): (x, y, ok).
+
+    A chord that rounds to a point (lines through one point, a line tangent to the disk) can
+    come out a hair empty or a hair outside the disk; it is read as empty only where the point
+    that best balances its two cutting rows violates a row, or the disk, by more than
+    ``ROOM r`` (:func:`_balanced`)."""
     ax, ay, bk = rows[k, 0], rows[k, 1], rows[k, 2]
     disc = (r - bk) * (r + bk)  # not r^2 - b^2: a line that barely cuts the disk keeps its chord
     if disc < 0.0:
-        return 0.0, 0.0, False
+        if abs(bk) - r > ROOM * r:
+            return 0.0, 0.0, False
+        disc = 0.0  # tangent to the disk within rounding: its one point
     root = np.sqrt(disc)
     # the line: (ox, oy) + t (dx, dy), (ox, oy) its point nearest the disk's centre
     ox, oy, dx, dy = bk * ax, bk * ay, -ay, ax
     lo, hi = -root, root
+    slope_lo, slope_hi = 1.0, 1.0  # the rate at which the rows setting lo and hi are violated
     for m in range(k):
         denom = rows[m, 0] * dx + rows[m, 1] * dy
         numer = rows[m, 2] - (rows[m, 0] * ox + rows[m, 1] * oy)
@@ -48,16 +58,42 @@ def _on_line(rows, k, r, px, py, toward):
                 return 0.0, 0.0, False
             continue
         if denom > 0.0:
-            hi = min(hi, numer / denom)
-        else:
-            lo = max(lo, numer / denom)
-        if lo > hi:
+            if numer / denom < hi:
+                hi, slope_hi = numer / denom, denom
+        elif numer / denom > lo:
+            lo, slope_lo = numer / denom, -denom
+    if lo > hi:
+        t = _balanced(rows, k, r, root, lo, hi, slope_lo, slope_hi, ox, oy, dx, dy)
+        if np.isnan(t):
             return 0.0, 0.0, False
-    if toward:
+    elif toward:
         t = hi if px * dx + py * dy > 0.0 else lo
     else:
         t = min(max(dx * (px - ox) + dy * (py - oy), lo), hi)
     return ox + t * dx, oy + t * dy, True
+
+
+@njit(cache=True, inline="always")
+def _balanced(rows, k, r, root, lo, hi, slope_lo, slope_hi, ox, oy, dx, dy):
+    """Where the chord's bounds crossed (``lo > hi``): the point ``t`` of the chord
+    ``[-root, root]`` nearest the one at which the two rows that set them are violated alike,
+    if no row before k is violated there by more than ``ROOM r`` (the rounding of lines through
+    one point) nor the disk (a tangent line's rounding); else NaN.
+
+    Each row's violation along the line grows at the rate ``|a_m . d|``; weighting the two
+    crossings by those rates puts ``t`` next to the crossing of the steeper row, whose
+    position rounding moves least (a nearly parallel row's crossing can be far off, its
+    violation there is not)."""
+    t = (slope_lo * lo + slope_hi * hi) / (slope_lo + slope_hi)
+    t = min(max(t, -root), root)
+    x, y = ox + t * dx, oy + t * dy
+    allowed = ROOM * r
+    if np.sqrt(x * x + y * y) - r > allowed:
+        return np.nan
+    for m in range(k):
+        if rows[m, 0] * x + rows[m, 1] * y - rows[m, 2] > allowed:
+            return np.nan
+    return t
 
 
 @njit(cache=True, inline="always")

@@ -300,6 +300,5 @@ def solve_batch(
         A = np.zeros((n, 1, 2))
         b = np.zeros((n, 1))
         mask = np.zeros((n, 1), dtype=np.bool_)
-    kernel = _solve_parallel if threads.parallel(n) else _solve_serial
-    kernel(nominal, A, b, mask, lo, hi, *outputs)
+    threads.launch(_solve_serial, _solve_parallel, n, nominal, A, b, mask, lo, hi, *outputs)
     return outputs

@@ -17,6 +17,7 @@ from scipy import sparse
 from scipy.optimize import linprog
 
 from rsvo_env.qp import exact
+from rsvo_env.util.validation import shown
 
 # Tight tolerances. At clarabel's defaults the answer differs from the exact one by ~3e-5; at
 # 1e-10 still by ~2e-5 on degenerate instances (a constraint active with a zero multiplier, e.g.
@@ -230,7 +231,7 @@ def _solve_unit(
             break
     if x is None:
         raise RuntimeError(
-            f"reference solver {solver!r} (and clarabel) found no projection for nominal "
+            f"reference solver {shown(solver)} (and clarabel) found no projection for nominal "
             f"{np.asarray(nominal).tolist()} (in units of the box) with {len(b)} rows; the "
             f"least violation is {t:.3g}"
         )

@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from rsvo_env.util.validation import check_theta
+from rsvo_env.util.validation import check_theta, shown
 
 WEIGHTING_MODES = ("asymmetric", "symmetric")
 Weighting = str | Callable[[NDArray[np.float64]], ArrayLike]
@@ -123,7 +123,7 @@ def check_weighting(mode: Weighting, theta: ArrayLike) -> None:
 
 def _unknown(mode: object) -> ValueError:
     return ValueError(
-        f"weighting mode {mode!r} is unknown; use one of {WEIGHTING_MODES} or a callable"
+        f"weighting mode {shown(mode)} is unknown; use one of {WEIGHTING_MODES} or a callable"
     )
 
 
@@ -242,7 +242,7 @@ def validate_weight_matrix(w: NDArray[np.float64], n: int) -> NDArray[np.float64
     if bad.any():
         i, j = np.argwhere(bad)[0]
         raise ValueError(
-            f"weight matrix entry omega[{i}, {j}] = {float(w[i, j])!r} is not in [0, 1]"
+            f"weight matrix entry omega[{i}, {j}] = {shown(float(w[i, j]))} is not in [0, 1]"
         )
     pair_sum = w + w.T
     bad = off & (np.abs(pair_sum - 1.0) > 1e-9)
@@ -250,7 +250,7 @@ def validate_weight_matrix(w: NDArray[np.float64], n: int) -> NDArray[np.float64
         i, j = np.argwhere(bad)[0]
         raise ValueError(
             f"weight matrix breaks omega[{i}, {j}] + omega[{j}, {i}] = 1: "
-            f"{float(w[i, j])!r} + {float(w[j, i])!r} = {float(pair_sum[i, j])!r}"
+            f"{shown(float(w[i, j]))} + {shown(float(w[j, i]))} = {shown(float(pair_sum[i, j]))}"
         )
     w = w.copy()
     np.fill_diagonal(w, 0.0)
@@ -264,7 +264,7 @@ def theta_for_weight(omega: float) -> tuple[float, float]:
     The paper's position swap is stated in weights (0.8/0.2, 0.5/0.5, 0.2/0.8).
     """
     if not 0.0 <= omega <= 1.0:
-        raise ValueError(f"omega = {omega!r} must be in [0, 1]")
+        raise ValueError(f"omega = {shown(omega)} must be in [0, 1]")
     share = float(np.arccos(np.sqrt(omega)) / (np.pi / 2))
     return share, 1.0 - share
 

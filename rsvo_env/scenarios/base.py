@@ -18,9 +18,10 @@ from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env import dynamics
-from rsvo_env.control import nominal, rorca, rorca_route, scripted_rorca
+from rsvo_env.control import nominal, rorca, rorca_route, scripted_rorca, stall
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.geometry.obstacles import Obstacles
+from rsvo_env.scenarios.checks import check_values
 from rsvo_env.util.planar import within
 from rsvo_env.util.validation import (
     check_count,
@@ -28,7 +29,8 @@ from rsvo_env.util.validation import (
     check_real,
     check_theta,
     check_theta_interval,
-    real_array,
+    shown,
+    unknown_keywords,
 )
 
 COMMON_DEFAULTS: dict[str, Any] = {
@@ -97,61 +99,44 @@ class Scenario:
             if owner and self.models:
                 raise TypeError(
                     f"{self.name}.{key} is the {owner[0]}'s parameter: give "
-                    f"dynamics={owner[0]!r} too"
+                    f"dynamics={shown(owner[0])} too"
                 )
         if unknown:
-            raise TypeError(
-                f"{self.name}() got unknown keyword argument(s) {unknown}; known: {sorted(params)}"
-            )
+            raise TypeError(unknown_keywords(f"{self.name}()", unknown, params))
         if self.fixed_agents is not None and kwargs.get("num_agents", self.fixed_agents) != (
             self.fixed_agents
         ):
             raise ValueError(
                 f"{self.name} is laid out for exactly {self.fixed_agents} agents; "
-                f"num_agents = {kwargs['num_agents']!r} is not possible (use crowd or "
+                f"num_agents = {shown(kwargs['num_agents'])} is not possible (use crowd or "
                 "circular_swap for other counts)"
             )
         params.update(kwargs)
         self.params = params
         check_count(params["num_agents"], f"{self.name}.num_agents", 2)
-        for key, default in defaults.items():
-            # every real-valued parameter must be real and finite (a NaN would only surface
-            # later, as an error naming no field)
-            if isinstance(default, bool):
-                if not isinstance(params[key], (bool, np.bool_)):
-                    raise ValueError(f"{self.name}.{key} = {params[key]!r} must be True or False")
-            elif isinstance(default, float):
-                params[key] = check_real(params[key], f"{self.name}.{key}")
-            elif isinstance(default, tuple):
-                arr = real_array(params[key], f"{self.name}.{key}")
-                if arr.shape != np.shape(default):
-                    raise ValueError(
-                        f"{self.name}.{key} = {params[key]!r} has shape {arr.shape}, expected "
-                        f"{np.shape(default)}"
-                    )
-                if not np.isfinite(arr).all():
-                    raise ValueError(f"{self.name}.{key} = {params[key]!r} must be finite")
+        check_values(self.name, params, defaults)
         for key in (*self.positive, *self.model.scenario_positive):
             if key in params:
                 params[key] = check_positive(params[key], f"{self.name}.{key}")
+        stall.check_dt(params["dt"], f"{self.name}.dt")
         if params["rh_hold"] is None:  # the controller's own: routing's last resort waits
             routed = params["nominal"] == "rorca" and params["rorca_route"]
             params["rh_hold"] = rorca_route.RH_HOLD if routed else 0.0
         params["rh_hold"] = check_real(params["rh_hold"], f"{self.name}.rh_hold")
         for key in self.nonnegative:
             if key in params and params[key] < 0:
-                raise ValueError(f"{self.name}.{key} = {params[key]!r} must be >= 0")
+                raise ValueError(f"{self.name}.{key} = {shown(params[key])} must be >= 0")
         params[self.limit_name] = check_positive(
             params[self.limit_name], f"{self.name}.{self.limit_name}"
         )
         if params["deadlock_resolution"] not in DEADLOCK_RESOLUTIONS:
             raise ValueError(
-                f"{self.name}.deadlock_resolution = {params['deadlock_resolution']!r}; "
+                f"{self.name}.deadlock_resolution = {shown(params['deadlock_resolution'])}; "
                 f"use one of {DEADLOCK_RESOLUTIONS}"
             )
         if params["nominal"] not in NOMINALS:
             raise ValueError(
-                f"{self.name}.nominal = {params['nominal']!r}; use one of {NOMINALS}"
+                f"{self.name}.nominal = {shown(params['nominal'])}; use one of {NOMINALS}"
             )
         for key in ("rorca_tau", "rorca_pad"):
             params[key] = check_positive(params[key], f"{self.name}.{key}")
@@ -166,10 +151,14 @@ class Scenario:
     def choose_model(self, kwargs: dict[str, Any]) -> None:
         """The model ``dynamics`` names, where the scene takes one (else the class's own)."""
         if self.models:
-            name = kwargs.get("dynamics", type(self).dynamics)
-            if name not in self.models:
-                raise ValueError(f"{self.name}.dynamics = {name!r}; use one of {self.models}")
-            self.dynamics = name  # this scene's model (the class's is the default)
+            given = kwargs.get("dynamics", type(self).dynamics)
+            # an instance of a registered model stands for its name (models are stateless)
+            if isinstance(given, Dynamics) and dynamics.MODELS.get(given.name) == given:
+                given = kwargs["dynamics"] = given.name
+            if not isinstance(given, str) or given not in self.models:
+                raise ValueError(f"{self.name}.dynamics = {shown(given)}; use one of "
+                                 f"{self.models} or an instance of one")  # fmt: skip
+            self.dynamics = given  # this scene's model (the class's is the default)
 
     def all_defaults(self) -> dict[str, Any]:
         """Every parameter's default: the common ones, the model's (``dynamics`` names it where
@@ -239,7 +228,8 @@ class Scenario:
         if too_big.any():
             i = int(np.argmax(too_big))
             raise ValueError(
-                f"theta[{i}] = {float(th[i])!r} exceeds theta_max = {self.params['theta_max']} "
+                f"theta[{i}] = {shown(float(th[i]))} exceeds theta_max = "
+                f"{self.params['theta_max']} "
                 f"(agent {i}); raise theta_max to allow it"
             )
         return th

@@ -3,7 +3,7 @@ each raises ``ValueError`` naming the agent, the obstacle and the values."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.geometry.clearance import contact
 from rsvo_env.geometry.obstacles import nearest_points
+from rsvo_env.util.validation import check_real, real_array, shown
 
 if TYPE_CHECKING:
     from rsvo_env.filter.safety import SafetyFilter
@@ -33,8 +34,8 @@ def check_scene(scenario: Scenario, starts: NDArray, goals: NDArray, capsules: N
             others = np.where(np.arange(n) == i, np.inf, d / (grown[i] + grown))
             j = int(np.argmin(others))
             raise ValueError(
-                f"{what} of agents {i} and {j} overlap: distance {float(d[j])!r} "
-                f"< {float(grown[i] + grown[j])!r}, the sum of their radii (h < 0)"
+                f"{what} of agents {i} and {j} overlap: distance {shown(float(d[j]))} "
+                f"< {shown(float(grown[i] + grown[j]))}, the sum of their radii (h < 0)"
             )
     if len(capsules) == 0:
         return
@@ -51,7 +52,7 @@ def check_scene(scenario: Scenario, starts: NDArray, goals: NDArray, capsules: N
         if gap[i, o] < 0:
             raise ValueError(
                 f"the {what} of agent {i}, {at[i].tolist()}, is inside obstacle {o} "
-                f"(its body would overlap it by {float(-gap[i, o])!r})"
+                f"(its body would overlap it by {shown(float(-gap[i, o]))})"
             )
 
 
@@ -60,7 +61,7 @@ def check_scene_filter(scenario: Scenario, flt: SafetyFilter) -> None:
     model = flt.config.model
     if model != scenario.model:
         raise ValueError(
-            f"filter dynamics {flt.config.dynamics!r} != scenario {scenario.dynamics!r}"
+            f"filter dynamics {shown(flt.config.dynamics)} != scenario {shown(scenario.dynamics)}"
         )
     if not model.per_agent_bodies and not np.all(scenario.radii == scenario.radii[0]):
         raise ValueError(f"bodies of different radii are not available for the {model.name} yet")
@@ -70,3 +71,24 @@ def check_scene_filter(scenario: Scenario, flt: SafetyFilter) -> None:
         raise ValueError(f"input bounds per agent are not available for the {model.name} yet")
     if scenario.num_obstacles and type(model).obstacle_rows is Dynamics.obstacle_rows:
         raise ValueError(f"obstacles are not available for the {model.name} yet")
+
+
+def check_values(name: str, params: dict[str, Any], defaults: dict[str, Any]) -> None:
+    """Each parameter of the type its default has: a flag True or False, a real number finite
+    (converted to float in ``params``), a tuple of the default's shape and finite; a NaN
+    would only surface later, as an error naming no field. ``name`` is the scenario's."""
+    for key, default in defaults.items():
+        if isinstance(default, bool):
+            if not isinstance(params[key], (bool, np.bool_)):
+                raise ValueError(f"{name}.{key} = {shown(params[key])} must be True or False")
+        elif isinstance(default, float):
+            params[key] = check_real(params[key], f"{name}.{key}")
+        elif isinstance(default, tuple):
+            arr = real_array(params[key], f"{name}.{key}")
+            if arr.shape != np.shape(default):
+                raise ValueError(
+                    f"{name}.{key} = {shown(params[key])} has shape {arr.shape}, expected "
+                    f"{np.shape(default)}"
+                )
+            if not np.isfinite(arr).all():
+                raise ValueError(f"{name}.{key} = {shown(params[key])} must be finite")

@@ -11,8 +11,9 @@ from numpy.typing import NDArray
 
 from rsvo_env import dynamics
 from rsvo_env.control import nominal
+from rsvo_env.dynamics.barriers import BARRIERS, SPLITS
 from rsvo_env.scenarios.base import Scenario
-from rsvo_env.util.validation import check_count
+from rsvo_env.util.validation import check_count, shown
 
 
 class PositionSwap(Scenario):
@@ -127,14 +128,20 @@ class RampMerge(Scenario):
     def check(self) -> None:
         if self.params["nominal"] != "move_to_goal":
             raise ValueError(
-                f"ramp_merge.nominal = {self.params['nominal']!r}: the ramp merge's scripted "
+                f"ramp_merge.nominal = {shown(self.params['nominal'])}: the ramp merge's scripted "
                 "controller is the paper's lane follower (nominal='move_to_goal' names it)"
             )
+        # the filter's settings the scene names, checked with the filter off too
+        for key, names in (("barrier", BARRIERS), ("split", SPLITS)):
+            if not isinstance(self.params[key], str) or self.params[key] not in names:
+                raise ValueError(
+                    f"ramp_merge.{key} = {shown(self.params[key])}; use one of {names}"
+                )
         merge_y, finish = self.params["merge_point"][1], self.params["finish_y"]
         if not finish > merge_y:
             raise ValueError(
-                f"ramp_merge.finish_y = {finish!r} must lie beyond the merge point "
-                f"(y = {merge_y!r})"
+                f"ramp_merge.finish_y = {shown(finish)} must lie beyond the merge point "
+                f"(y = {shown(merge_y)})"
             )
 
     def lane_starts(self) -> NDArray[np.float64]:

@@ -9,6 +9,7 @@ from rsvo_env.scenarios.crowd import Crowd
 from rsvo_env.scenarios.paper import CircularSwap, PositionSwap, RampMerge
 from rsvo_env.scenarios.scenes import Doorway, ObstacleField, Scene
 from rsvo_env.scenarios.unicycle_crowd import UnicycleCrowd
+from rsvo_env.util.validation import shown
 
 SCENARIOS: dict[str, type[Scenario]] = {
     cls.name: cls for cls in (PositionSwap, CircularSwap, RampMerge, Crowd, Scene, Doorway,
@@ -24,5 +25,5 @@ def make_scenario(scenario: str | Scenario, **kwargs: Any) -> Scenario:
             raise TypeError("keyword arguments go to the scenario's constructor, not here")
         return scenario
     if scenario not in SCENARIOS:
-        raise ValueError(f"unknown scenario {scenario!r}; use one of {sorted(SCENARIOS)}")
+        raise ValueError(f"unknown scenario {shown(scenario)}; use one of {sorted(SCENARIOS)}")
     return SCENARIOS[scenario](**kwargs)

@@ -18,7 +18,7 @@ from rsvo_env.geometry.bodies import check_per_agent
 from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.scenarios.base import Scenario
 from rsvo_env.scenarios.checks import check_scene
-from rsvo_env.util.validation import check_count, real_array
+from rsvo_env.util.validation import check_count, real_array, shown
 
 BASE = {
     "safety_radius": 1.0,
@@ -129,8 +129,9 @@ class Doorway(Scenario):
         need = p["safety_radius"] + 2.0 * self.body_margin  # the filter's bodies
         if p["gap"] <= need:
             raise ValueError(
-                f"doorway.gap = {p['gap']!r} must exceed safety_radius = {p['safety_radius']!r}"
-                + (f" + 2 lookahead = {need!r}" if self.body_margin else "")
+                f"doorway.gap = {shown(p['gap'])} must exceed safety_radius = "
+                f"{shown(p['safety_radius'])}"
+                + (f" + 2 lookahead = {shown(need)}" if self.body_margin else "")
             )
 
     @property
@@ -212,7 +213,8 @@ class ObstacleField(Scenario):
         check_count(self.params["num_circles"], "obstacle_field.num_circles", 0)
         lo, hi = self.params["circle_radius"]
         if not 0 < lo <= hi:
-            raise ValueError(f"obstacle_field.circle_radius = {(lo, hi)!r} needs 0 < low <= high")
+            raise ValueError(f"obstacle_field.circle_radius = {shown((lo, hi))} needs 0 < low "
+                             f"<= high")
 
     @property
     def num_obstacles(self) -> int:
@@ -229,7 +231,7 @@ class ObstacleField(Scenario):
         spacing = 1.2 * R + self.start_clearance
         if n > 1 and ys[1] - ys[0] < spacing:
             raise ValueError(
-                f"obstacle_field: {n} agents do not fit on an edge of side {s} at {spacing!r} "
+                f"obstacle_field: {n} agents do not fit on an edge of side {s} at {shown(spacing)} "
                 "apart (1.2 safety radii, and 4 look-ahead distances for unicycles); raise side"
             )
         start = np.c_[np.full(n, -s / 2 - R), ys]

@@ -38,7 +38,7 @@ from rsvo_env.sim.state import State
 from rsvo_env.sim.weights import Weights
 from rsvo_env.util import planar
 from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
-from rsvo_env.util.validation import check_count, check_real
+from rsvo_env.util.validation import check_count, check_real, shown
 
 # the reward's weights (``rewards=``): progress toward the goal, the time cost, the goal bonus,
 # and the share of each agent's reward replaced by its env's mean
@@ -72,7 +72,7 @@ class Simulator:
         n = scenario.num_agents
         check_count(num_envs, "num_envs", 1)
         if frame not in observation.FRAMES:
-            raise ValueError(f"frame = {frame!r}; use one of {observation.FRAMES}")
+            raise ValueError(f"frame = {shown(frame)}; use one of {observation.FRAMES}")
         if num_obs_neighbors is None:
             num_obs_neighbors = min(n - 1, 6)
         if (
@@ -80,7 +80,8 @@ class Simulator:
             or not isinstance(num_obs_neighbors, (int, np.integer))
             or not 0 <= num_obs_neighbors < n
         ):
-            raise ValueError(f"num_obs_neighbors = {num_obs_neighbors!r} must be in [0, {n - 1}]")
+            raise ValueError(f"num_obs_neighbors = {shown(num_obs_neighbors)} must be in [0, "
+                             f"{n - 1}]")
         check_weighting(weighting, np.ones(n))  # now, not at the first reset
         self.scenario, self.num_envs, self.n = scenario, int(num_envs), n
         self.k = int(num_obs_neighbors)
@@ -91,7 +92,7 @@ class Simulator:
         )
         self.reward_team = check_real(r["reward_team"], "reward_team")
         if not 0.0 <= self.reward_team <= 1.0:
-            raise ValueError(f"reward_team = {r['reward_team']!r} must be in [0, 1]")
+            raise ValueError(f"reward_team = {shown(r['reward_team'])} must be in [0, 1]")
         p = scenario.params
         self.dt, self.max_steps, self.u_max = float(p["dt"]), int(p["max_steps"]), scenario.u_max
         self.safety_radius = float(p["safety_radius"])
@@ -155,7 +156,7 @@ class Simulator:
         check_scene_filter(self.scenario, flt)
         c = check_real(intervention_penalty, "intervention_penalty")
         if c < 0:
-            raise ValueError(f"intervention_penalty = {intervention_penalty!r} must be >= 0")
+            raise ValueError(f"intervention_penalty = {shown(intervention_penalty)} must be >= 0")
         self.filters.insert(0, flt)
         self.penalties.append(c)
         # what the world reports is what the filter acting last (right before integration) uses
@@ -232,10 +233,16 @@ class Simulator:
         self.residual = residual
 
     def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Normalised actions (E, N, 2) to physical controls: clip the norm to 1, scale by
-        u_max, rotate out of the goal frame; with residual actions, add them to the scripted
-        command (see :meth:`set_residual`)), or the model's own map of its actions."""
-        return self.scenario.model.to_controls(actions, self.scenario.params, self._planar_controls)
+        """Normalised actions (E, N, 2) to physical controls, by the model's map (the planar
+        one: clip the norm to 1, scale by each agent's limit, rotate out of the goal frame);
+        with residual actions, those controls added to the scripted command and held to each
+        agent's bounds by the model (see :meth:`set_residual`)."""
+        sc = self.scenario
+        model, params, limits = sc.model, sc.params, sc.agent_limits
+        u = model.to_controls(actions, params, self._planar_controls, limits)
+        if self.residual is not None:
+            u = self.residual.controls(sc, self.state, u, lambda c: model.hold(c, params, limits))
+        return u
 
     def _planar_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         limits = self.scenario.agent_limits
@@ -245,13 +252,12 @@ class Simulator:
             u = planar.clip_norm(actions, 1.0) * limits[:, None]
         if self.frame == "goal":
             u = planar.rotate(u, self.state.frame_angle)
-        if self.residual is not None:
-            u = self.residual.controls(self.scenario, self.state, u, self.u_max)
         return u
 
     def to_actions(self, controls: NDArray[np.float64]) -> NDArray[np.float64]:
         """Physical controls to the normalised action frame (no clipping)."""
-        return self.scenario.model.to_actions(controls, self.scenario.params, self._planar_actions)
+        sc = self.scenario
+        return sc.model.to_actions(controls, sc.params, self._planar_actions, sc.agent_limits)
 
     def _planar_actions(self, controls: NDArray[np.float64]) -> NDArray[np.float64]:
         limits = self.scenario.agent_limits

@@ -20,6 +20,8 @@ from typing import Any
 import numba
 import numpy as np
 
+from rsvo_env.util.validation import shown
+
 ENV_VAR = "RSVO_NUM_THREADS"
 # independent QPs a call below which a parallel launch costs more than the work (measured:
 # benchmarks/results/contention.md, kernel section)
@@ -41,9 +43,9 @@ def _checked(value: object, name: str) -> int:
         try:
             value = int(value.strip())
         except ValueError:
-            raise ValueError(f"{name} = {value!r} is not an integer thread count") from None
+            raise ValueError(f"{name} = {shown(value)} is not an integer thread count") from None
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{name} = {value!r} must be an integer thread count")
+        raise ValueError(f"{name} = {shown(value)} must be an integer thread count")
     n = int(value)
     if not 1 <= n <= limit:
         raise ValueError(f"{name} = {n} must be from 1 to numba's pool size, {limit}")
@@ -77,16 +79,9 @@ def using(n: int) -> Iterator[None]:
 
 
 def parallel(work: int) -> bool:
-    """Whether a kernel over ``work`` independent problems runs in parallel, and if so with the
-    library's thread count (numba's own count is per calling thread, so it is set here)."""
-    if _in_parallel(work):
-        numba.set_num_threads(_threads)
-        return True
-    return False
-
-
-def _in_parallel(work: int) -> bool:
-    """The one rule for running in parallel: opted in, and enough independent problems."""
+    """The one rule for running in parallel: opted in, and at least
+    :data:`PARALLEL_THRESHOLD` independent problems (``work``). It sets nothing: :func:`launch`
+    sets numba's count for the launch and puts the caller's back."""
     return _threads > 1 and work >= PARALLEL_THRESHOLD
 
 
@@ -96,7 +91,7 @@ def launch(serial: Callable, prange: Callable, work: int, *args: Any) -> Any:
     :data:`OUTLINED_THRESHOLD` agents (faster than the plain loop there), else ``serial``.
     numba's thread count for the calling thread, which a user's own kernels read, is set for
     the launch only and put back after it."""
-    n = _threads if _in_parallel(work) else int(work >= OUTLINED_THRESHOLD)
+    n = _threads if parallel(work) else int(work >= OUTLINED_THRESHOLD)
     if not n:
         return serial(*args)
     caller = numba.get_num_threads()

@@ -6,11 +6,50 @@ the offending value, and never repairs the input.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import difflib
+import reprlib
+from collections.abc import Iterable, Sequence
+from typing import Any
 
 import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
+
+# how long a value may stand in a message: an error names the value it refuses, and a message
+# stays a line long whatever the value (a list of a million numbers, a nested alias bomb)
+SHOWN_CHARS = 120
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel, _SHORT.maxstring, _SHORT.maxother = 3, SHOWN_CHARS, SHOWN_CHARS
+_SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = _SHORT.maxarray = 8
+
+
+def shown(value: Any) -> str:
+    """``repr(value)`` for a message, at most ``SHOWN_CHARS`` characters: containers cut after
+    a few items and levels (``reprlib``, which never renders what it leaves out), the rest cut
+    in the middle."""
+    try:
+        text = _SHORT.repr(value)
+    except Exception:  # a value whose own repr fails is still named by its type
+        text = f"<{type(value).__name__}>"
+    if len(text) > SHOWN_CHARS:
+        half = (SHOWN_CHARS - 3) // 2
+        text = f"{text[:half]}...{text[-half:]}"
+    return text
+
+
+def unknown_keywords(owner: str, unknown: Sequence[str], known: Iterable[str]) -> str:
+    """The message for keywords ``owner`` does not take: each with the known one it most
+    resembles, and the known ones listed while the message stays a few lines long."""
+    known = sorted(known)
+    guesses = [f"{shown(k)} (did you mean {shown(close[0])}?)" if close else shown(k)
+               for k in unknown for close in [difflib.get_close_matches(str(k), known, 1)]]
+    listing = ", ".join(known)
+    if len(listing) > 250:  # the message, at most 500 characters, keeps its start
+        listing = f"{listing[:220].rsplit(', ', 1)[0]}, ... ({len(known)} in all)"
+    head = f"{owner} got unknown keyword argument(s) {', '.join(guesses[:4])}"
+    if len(head) > 220:
+        head = f"{head[:200]}..."
+    return f"{head}; known: {listing}"
 
 
 @njit(cache=True)
@@ -25,7 +64,7 @@ def all_finite(a: NDArray) -> bool:
 def _label(index: int, names: Sequence[str] | None) -> str:
     if names is None:
         return f"agent {index}"
-    return f"agent {names[index]!r} (index {index})"
+    return f"agent {shown(names[index])} (index {index})"
 
 
 def real_array(values: ArrayLike, name: str) -> NDArray[np.float64]:
@@ -35,9 +74,9 @@ def real_array(values: ArrayLike, name: str) -> NDArray[np.float64]:
     try:
         arr = np.asarray(values)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be real numbers, got {values!r}") from exc
+        raise ValueError(f"{name} must be real numbers, got {shown(values)}") from exc
     if arr.dtype.kind not in "iuf":
-        raise ValueError(f"{name} must be real numbers, got {arr.dtype} values: {values!r}")
+        raise ValueError(f"{name} must be real numbers, got {arr.dtype} values: {shown(values)}")
     return arr.astype(np.float64, copy=False)
 
 
@@ -56,7 +95,7 @@ def check_theta(
         where = f"[{idx[0]}]" if len(idx) == 1 else (f"[{idx}]" if idx else "")
         value = arr[idx] if idx else arr
         raise ValueError(
-            f"{name}{where} = {float(value)!r}: a personality score must be finite and >= 0"
+            f"{name}{where} = {shown(float(value))}: a personality score must be finite and >= 0"
             + (f" (agent {idx[0]})" if len(idx) == 1 else "")
         )
     return arr
@@ -66,9 +105,9 @@ def check_theta_interval(value: ArrayLike, name: str, theta_max: float) -> tuple
     """A range of personality scores (low, high): finite, 0 < low <= high <= ``theta_max``."""
     arr = real_array(value, name)
     if arr.shape != (2,) or not np.isfinite(arr).all() or not 0 < arr[0] <= arr[1]:
-        raise ValueError(f"{name} = {value!r} must be (low, high) with 0 < low <= high")
+        raise ValueError(f"{name} = {shown(value)} must be (low, high) with 0 < low <= high")
     if arr[1] > theta_max:
-        raise ValueError(f"{name} = {value!r} exceeds the scenario's theta_max = {theta_max}")
+        raise ValueError(f"{name} = {shown(value)} exceeds the scenario's theta_max = {theta_max}")
     return float(arr[0]), float(arr[1])
 
 
@@ -110,11 +149,11 @@ def check_vectors(
 
 def check_action(value: ArrayLike, agent: str, shape: tuple[int, ...] = (2,)) -> NDArray:
     """One agent's action: real numbers, the right shape, finite."""
-    arr = real_array(value, f"action of agent {agent!r}")
+    arr = real_array(value, f"action of agent {shown(agent)}")
     if arr.shape != shape:
-        raise ValueError(f"action of agent {agent!r} has shape {arr.shape}, expected {shape}")
+        raise ValueError(f"action of agent {shown(agent)} has shape {arr.shape}, expected {shape}")
     if not np.isfinite(arr).all():
-        raise ValueError(f"action of agent {agent!r} = {arr.tolist()} is not finite")
+        raise ValueError(f"action of agent {shown(agent)} = {arr.tolist()} is not finite")
     return arr
 
 
@@ -127,7 +166,7 @@ def check_action_dict(
     per-agent checks run only to name the offender.
     """
     if not isinstance(actions, dict):
-        raise ValueError(f"actions must be a dict keyed by agent name, got {type(actions)!r}")
+        raise ValueError(f"actions must be a dict keyed by agent name, got {shown(type(actions))}")
     # as many keys as live agents, each of them present: exactly the live agents
     values = [actions[a] for a in agents if a in actions]
     if len(actions) != len(agents) or len(values) != len(agents):
@@ -135,11 +174,11 @@ def check_action_dict(
         unknown = [a for a in actions if a not in live]
         if unknown:
             raise ValueError(
-                f"unknown agent name {unknown[0]!r} with action {actions[unknown[0]]!r}; "
+                f"unknown agent name {shown(unknown[0])} with action {shown(actions[unknown[0]])}; "
                 f"live agents are {list(agents)}"
             )
         missing = [a for a in agents if a not in actions]
-        raise ValueError(f"no action given for agent {missing[0]!r}")
+        raise ValueError(f"no action given for agent {shown(missing[0])}")
     try:
         out = np.array(values)
     except (TypeError, ValueError):
@@ -162,7 +201,7 @@ def check_count(value: int, name: str, least: int) -> int:
     """An integer >= ``least`` (not a bool, a float or a string)."""
     integer = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
     if not integer or value < least:
-        raise ValueError(f"{name} = {value!r} must be an integer >= {least}")
+        raise ValueError(f"{name} = {shown(value)} must be an integer >= {least}")
     return int(value)
 
 
@@ -173,7 +212,7 @@ def check_seed(seed: int | None, name: str = "seed") -> int | None:
         return None
     integer = isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_))
     if not integer or seed < 0:
-        raise ValueError(f"{name} = {seed!r} must be None or an integer >= 0")
+        raise ValueError(f"{name} = {shown(seed)} must be None or an integer >= 0")
     return int(seed)
 
 
@@ -181,31 +220,31 @@ def check_flag(value: bool, name: str) -> bool:
     """True or False (a bool or numpy bool; not a string such as ``"False"``, which is truthy,
     nor 0 and 1)."""
     if not isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} = {value!r} must be True or False")
+        raise ValueError(f"{name} = {shown(value)} must be True or False")
     return bool(value)
 
 
 def check_positive(value: float, name: str) -> float:
     """A finite real number > 0 (not a bool or a string)."""
     if isinstance(value, (bool, np.bool_, str, bytes)):
-        raise ValueError(f"{name} = {value!r} must be a finite number > 0")
+        raise ValueError(f"{name} = {shown(value)} must be a finite number > 0")
     try:
         v = float(value)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} = {value!r} must be a finite number > 0") from exc
+        raise ValueError(f"{name} = {shown(value)} must be a finite number > 0") from exc
     if not np.isfinite(v) or v <= 0:
-        raise ValueError(f"{name} = {value!r} must be a finite number > 0")
+        raise ValueError(f"{name} = {shown(value)} must be a finite number > 0")
     return v
 
 
 def check_real(value: float, name: str) -> float:
     """A finite real number (not a bool, a string or a complex number)."""
     if isinstance(value, (bool, np.bool_, str, bytes, complex, np.complexfloating)):
-        raise ValueError(f"{name} = {value!r} must be a finite real number")
+        raise ValueError(f"{name} = {shown(value)} must be a finite real number")
     try:
         v = float(value)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} = {value!r} must be a finite real number") from exc
+        raise ValueError(f"{name} = {shown(value)} must be a finite real number") from exc
     if not np.isfinite(v):
-        raise ValueError(f"{name} = {value!r} must be a finite real number")
+        raise ValueError(f"{name} = {shown(value)} must be a finite real number")
     return v
