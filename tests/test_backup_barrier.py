@@ -314,3 +314,33 @@ def test_an_unsafe_start_is_reported_and_the_nominal_not_passed_through():
     assert h1 > h0  # the least-violating action still brakes
     same = flt.filter(np.zeros((2, 2)), nominal, [1.0, 1.0], velocities=v)
     assert not same.feasible.any()
+
+
+@pytest.mark.parametrize("dt", [0.05, None])
+@pytest.mark.parametrize("seed", range(4))
+def test_outside_the_safe_set_culling_is_exact_on_feasible_agents(dt, seed):
+    """Crowds of 68 to 92 double integrators at random velocities, not scaled into the safe
+    set (the default segment barrier, dt 0.05 and continuous time): the culled filter flags the
+    same agents infeasible as the rows over all pairs, and every feasible agent's action is the
+    all-pairs one to 1e-12 of the box. An infeasible agent's least-violating action is that of
+    the rows examined and may differ (docs/double_integrator.md, "Which pairs are examined")."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(68, 93))
+    p, v, radii, a, goals, theta = safe_crowd(rng, n, 1.0, 4.0, spacing=2.6)
+    flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=3.0, dt=dt,
+                                    dynamics="double_integrator"))  # fmt: skip
+    Ia, Ja = pairs.all_pairs(n)
+    lo, hi = -np.c_[a, a], np.c_[a, a]
+    boxes = bb.AgentBoxes(radii, lo, hi)
+    infeasible = 0
+    for _ in range(3):
+        u = np.clip(2.0 * (goals - p) - v, lo, hi)
+        res = flt.filter(p, u, theta, velocities=v, radii=radii, u_max=a)
+        w = flt.pair_weights(theta, None, Ia, Ja)
+        rows, _ = sb.segment_rows(p, v, w, Ia, Ja, flt.config.gamma, dt, boxes, cull=False)
+        ua, fa = solvers.solve("exact", u, rows.flat_A, rows.flat_b, rows.offsets, lo, hi)[:2]
+        assert np.array_equal(fa, res.feasible)
+        assert np.abs(ua - res.actions)[fa].max(initial=0.0) <= 1e-12 * a.max()
+        infeasible += int((~fa).sum())
+        p, v = double_integrator_step(p, v, res.actions, 0.05)
+    assert infeasible > 0  # the family reaches outside the safe set

@@ -2,6 +2,10 @@
 arrays (validated), the doorway and the obstacle field; PettingZoo's seed test; safety of whole
 episodes behind the filter, collisions counted on the bodies' true sizes without it."""
 
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from pettingzoo.test import parallel_seed_test
@@ -9,6 +13,8 @@ from pettingzoo.test import parallel_seed_test
 import rsvo_env
 import wrappers
 from rsvo_env.scenarios import make_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def custom(**kw):
@@ -201,3 +207,22 @@ def test_the_doorways_script_never_heads_into_the_wall(gap):
         y_face = x[:, 1] + s_face * (target[:, 1] - x[:, 1])
         bad = crosses & (np.abs(y_face) > band + 1e-9)
         assert not bad.any(), x[bad]
+
+
+def test_a_sparse_crowd_is_laid_out_in_memory_by_agents_not_by_area():
+    """Resetting 100 agents with ``side_factor=700`` (a square 7,000 radii wide) costs the
+    process no more memory than a default crowd does, in a fresh interpreter after one warm-up
+    reset (the layout's grid was (side / spacing)^2 cells: 1.08 GB); ``spacing_factor=1e-4``
+    lays out, then the overlapping starts are refused by name (it was a MemoryError)."""
+    code = (
+        "import resource, rsvo_env\n"
+        "rsvo_env.parallel_env('crowd', num_agents=100).reset(seed=0)\n"
+        "before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss\n"
+        "rsvo_env.parallel_env('crowd', num_agents=100, side_factor=700.0).reset(seed=0)\n"
+        "print((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert float(out.stdout) < 32.0  # MB
+    with pytest.raises(ValueError, match="overlap"):
+        rsvo_env.parallel_env("crowd", num_agents=100, spacing_factor=1e-4).reset(seed=0)

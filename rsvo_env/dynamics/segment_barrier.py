@@ -47,8 +47,11 @@ from rsvo_env.dynamics.backup_barrier import (
 from rsvo_env.dynamics.barriers import braking_capability
 from rsvo_env.geometry.segments import separate, separation
 from rsvo_env.qp.rows import Rows
+from rsvo_env.util.planar import norm
 
 _SQRT2 = np.sqrt(2.0)
+# the relative rounding of a coordinate after the few operations a bound takes
+COORDINATES = 64.0 * np.finfo(np.float64).eps
 
 __all__ = ["AgentBoxes", "segment_radii", "segment_rows"]
 
@@ -91,7 +94,11 @@ def segment_rows(
         h_o = bound_o - radii[agent] - cap[:, 4]
         owner.append(agent)
         normals.append(e_o)
-        shares.append(rate * settled(h_o, np.sqrt((a0 * a0).sum(axis=-1)) + t.L[agent]))
+        # h_o carries the rounding of coordinates as large as the obstacle's ends and where it
+        # lies, not only of the agent's distance and reach (a wall 2e7 m long: ~1e-9 m)
+        far = np.maximum(norm(cap[:, 0:2] - near), norm(cap[:, 2:4] - near)) + norm(near)
+        size = norm(a0) + t.L[agent] + (COORDINATES / SETTLE) * far
+        shares.append(rate * settled(h_o, size))
         hs.append(h_o)
         others.append(neighbour)
         obstacle_h = np.full(M, np.inf)

@@ -36,9 +36,9 @@ def _on_line(rows, k, r, px, py, toward):
     (``toward`` False), or furthest along the direction (px, py) (``toward`` True): (x, y, ok).
 
     A chord that rounds to a point (lines through one point, a line tangent to the disk) can
-    come out a hair empty or a hair outside the disk; it is read as empty only where the point
-    that best balances its two cutting rows violates a row, or the disk, by more than
-    ``ROOM r`` (:func:`_balanced`)."""
+    come out a hair empty or a hair outside the disk; it is read as empty only where, at the
+    point of the chord where the largest violation of the rows before k is least, a row or the
+    disk is violated by more than ``ROOM r`` (:func:`_balanced`)."""
     ax, ay, bk = rows[k, 0], rows[k, 1], rows[k, 2]
     disc = (r - bk) * (r + bk)  # not r^2 - b^2: a line that barely cuts the disk keeps its chord
     if disc < 0.0:
@@ -49,7 +49,7 @@ def _on_line(rows, k, r, px, py, toward):
     # the line: (ox, oy) + t (dx, dy), (ox, oy) its point nearest the disk's centre
     ox, oy, dx, dy = bk * ax, bk * ay, -ay, ax
     lo, hi = -root, root
-    slope_lo, slope_hi = 1.0, 1.0  # the rate at which the rows setting lo and hi are violated
+    slope_lo, slope_hi = np.inf, np.inf  # how fast the rows setting lo and hi (none: the disk)
     for m in range(k):
         denom = rows[m, 0] * dx + rows[m, 1] * dy
         numer = rows[m, 2] - (rows[m, 0] * ox + rows[m, 1] * oy)
@@ -63,7 +63,15 @@ def _on_line(rows, k, r, px, py, toward):
         elif numer / denom > lo:
             lo, slope_lo = numer / denom, -denom
     if lo > hi:
-        t = _balanced(rows, k, r, root, lo, hi, slope_lo, slope_hi, ox, oy, dx, dy)
+        # the two rows setting lo and hi alone are violated by at least this between them
+        gap = lo - hi
+        if slope_lo == np.inf or slope_hi == np.inf:
+            least = gap * min(slope_lo, slope_hi)
+        else:
+            least = gap * slope_lo * slope_hi / (slope_lo + slope_hi)
+        if least > ROOM * r:
+            return 0.0, 0.0, False
+        t = _balanced(rows, k, r, root, lo, hi, ox, oy, dx, dy)
         if np.isnan(t):
             return 0.0, 0.0, False
     elif toward:
@@ -74,26 +82,38 @@ def _on_line(rows, k, r, px, py, toward):
 
 
 @njit(cache=True, inline="always")
-def _balanced(rows, k, r, root, lo, hi, slope_lo, slope_hi, ox, oy, dx, dy):
-    """Where the chord's bounds crossed (``lo > hi``): the point ``t`` of the chord
-    ``[-root, root]`` nearest the one at which the two rows that set them are violated alike,
-    if no row before k is violated there by more than ``ROOM r`` (the rounding of lines through
-    one point) nor the disk (a tangent line's rounding); else NaN.
+def _balanced(rows, k, r, root, lo, hi, ox, oy, dx, dy):
+    """Where the chord's bounds crossed (``lo > hi``): the point ``t`` of the chord between
+    them at which the largest violation of the rows before k is least, if that violation is at
+    most ``ROOM r`` (the rounding of lines through one point) and the point is within the disk
+    to ``ROOM r`` (a tangent line's rounding); else NaN.
 
-    Each row's violation along the line grows at the rate ``|a_m . d|``; weighting the two
-    crossings by those rates puts ``t`` next to the crossing of the steeper row, whose
-    position rounding moves least (a nearly parallel row's crossing can be far off, its
-    violation there is not)."""
-    t = (slope_lo * lo + slope_hi * hi) / (slope_lo + slope_hi)
-    t = min(max(t, -root), root)
+    The largest violation along the line is convex in ``t`` (a maximum of lines), so a ternary
+    search finds its least; the crossings that set ``lo`` and ``hi`` alone would not do, since
+    the crossing of a nearly parallel row can be far off where its violation is not."""
+    a, b = max(hi, -root), min(lo, root)
+    for _ in range(100):
+        t1, t2 = a + (b - a) / 3.0, b - (b - a) / 3.0
+        if _worst(rows, k, ox + t1 * dx, oy + t1 * dy) <= _worst(rows, k, ox + t2 * dx,
+                                                                 oy + t2 * dy):  # fmt: skip
+            b = t2
+        else:
+            a = t1
+    t = 0.5 * (a + b)
     x, y = ox + t * dx, oy + t * dy
     allowed = ROOM * r
-    if np.sqrt(x * x + y * y) - r > allowed:
+    if np.sqrt(x * x + y * y) - r > allowed or _worst(rows, k, x, y) > allowed:
         return np.nan
-    for m in range(k):
-        if rows[m, 0] * x + rows[m, 1] * y - rows[m, 2] > allowed:
-            return np.nan
     return t
+
+
+@njit(cache=True, inline="always")
+def _worst(rows, k, x, y):
+    """The largest violation ``a_m . (x, y) - b_m`` of the rows before k."""
+    worst = -np.inf
+    for m in range(k):
+        worst = max(worst, rows[m, 0] * x + rows[m, 1] * y - rows[m, 2])
+    return worst
 
 
 @njit(cache=True, inline="always")

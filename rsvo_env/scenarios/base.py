@@ -21,7 +21,6 @@ from rsvo_env import dynamics
 from rsvo_env.control import nominal, rorca, rorca_route, scripted_rorca, stall
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.geometry.obstacles import Obstacles
-from rsvo_env.scenarios.checks import check_values
 from rsvo_env.util.planar import within
 from rsvo_env.util.validation import (
     check_count,
@@ -29,6 +28,7 @@ from rsvo_env.util.validation import (
     check_real,
     check_theta,
     check_theta_interval,
+    check_values,
     shown,
     unknown_keywords,
 )

@@ -3,7 +3,7 @@ each raises ``ValueError`` naming the agent, the obstacle and the values."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.geometry.clearance import contact
 from rsvo_env.geometry.obstacles import nearest_points
-from rsvo_env.util.validation import check_real, real_array, shown
+from rsvo_env.util.validation import shown
 
 if TYPE_CHECKING:
     from rsvo_env.filter.safety import SafetyFilter
@@ -72,23 +72,3 @@ def check_scene_filter(scenario: Scenario, flt: SafetyFilter) -> None:
     if scenario.num_obstacles and type(model).obstacle_rows is Dynamics.obstacle_rows:
         raise ValueError(f"obstacles are not available for the {model.name} yet")
 
-
-def check_values(name: str, params: dict[str, Any], defaults: dict[str, Any]) -> None:
-    """Each parameter of the type its default has: a flag True or False, a real number finite
-    (converted to float in ``params``), a tuple of the default's shape and finite; a NaN
-    would only surface later, as an error naming no field. ``name`` is the scenario's."""
-    for key, default in defaults.items():
-        if isinstance(default, bool):
-            if not isinstance(params[key], (bool, np.bool_)):
-                raise ValueError(f"{name}.{key} = {shown(params[key])} must be True or False")
-        elif isinstance(default, float):
-            params[key] = check_real(params[key], f"{name}.{key}")
-        elif isinstance(default, tuple):
-            arr = real_array(params[key], f"{name}.{key}")
-            if arr.shape != np.shape(default):
-                raise ValueError(
-                    f"{name}.{key} = {shown(params[key])} has shape {arr.shape}, expected "
-                    f"{np.shape(default)}"
-                )
-            if not np.isfinite(arr).all():
-                raise ValueError(f"{name}.{key} = {shown(params[key])} must be finite")

@@ -23,21 +23,23 @@ UNROUTED = {key: COMMON_DEFAULTS[key] for key in ROUTED}
 @njit(cache=True)
 def _accept(cand, pts, count, spacing, side):
     """Append to ``pts[:count]`` each candidate at least ``spacing`` from every accepted point,
-    in order, until ``pts`` is full; a grid of cells of side ``spacing`` (at most 4 points each)
-    makes each test O(1). Returns the new count."""
+    in order, until ``pts`` is full. A grid of square cells of side at least ``spacing`` makes
+    each test look at the 3 x 3 cells around the candidate only, and there are at most about
+    4 N cells (N = ``len(pts)``) however sparse the crowd: the points of a cell are chained
+    (``head``, ``chain``), so memory is O(N), not O((side / spacing)^2). Returns the new
+    count."""
     n = pts.shape[0]
-    cells = max(int(np.ceil(side / spacing)), 1)
-    grid = np.full((cells, cells, 4), -1, dtype=np.int64)
+    cells = max(min(int(np.ceil(side / spacing)), int(np.ceil(2.0 * np.sqrt(n)))), 1)
+    width = side / cells  # >= spacing
+    head = np.full(cells * cells, -1, dtype=np.int64)
+    chain = np.full(n, -1, dtype=np.int64)
 
     def cell(v):
-        return min(max(int((v + side / 2) / spacing), 0), cells - 1)
+        return min(max(int((v + side / 2) / width), 0), cells - 1)
 
     for p in range(count):
-        cx, cy = cell(pts[p, 0]), cell(pts[p, 1])
-        for s in range(4):
-            if grid[cx, cy, s] < 0:
-                grid[cx, cy, s] = p
-                break
+        c = cell(pts[p, 0]) * cells + cell(pts[p, 1])
+        chain[p], head[c] = head[c], p
     s2 = spacing * spacing
     for c in range(cand.shape[0]):
         if count == n:
@@ -47,16 +49,15 @@ def _accept(cand, pts, count, spacing, side):
         ok = True
         for gx in range(max(cx - 1, 0), min(cx + 2, cells)):
             for gy in range(max(cy - 1, 0), min(cy + 2, cells)):
-                for s in range(4):
-                    q = grid[gx, gy, s]
-                    if q >= 0 and (pts[q, 0] - x) ** 2 + (pts[q, 1] - y) ** 2 < s2:
+                q = head[gx * cells + gy]
+                while q >= 0 and ok:
+                    if (pts[q, 0] - x) ** 2 + (pts[q, 1] - y) ** 2 < s2:
                         ok = False
+                    q = chain[q]
         if ok:
             pts[count, 0], pts[count, 1] = x, y
-            for s in range(4):
-                if grid[cx, cy, s] < 0:
-                    grid[cx, cy, s] = count
-                    break
+            k = cx * cells + cy
+            chain[count], head[k] = head[k], count
             count += 1
     return count
 

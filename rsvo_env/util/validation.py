@@ -38,17 +38,19 @@ def shown(value: Any) -> str:
 
 
 def unknown_keywords(owner: str, unknown: Sequence[str], known: Iterable[str]) -> str:
-    """The message for keywords ``owner`` does not take: each with the known one it most
-    resembles, and the known ones listed while the message stays a few lines long."""
+    """The message for keywords ``owner`` does not take: the list of them, the known one each
+    most resembles, and the known ones listed while the message stays under 500 characters."""
     known = sorted(known)
-    guesses = [f"{shown(k)} (did you mean {shown(close[0])}?)" if close else shown(k)
-               for k in unknown for close in [difflib.get_close_matches(str(k), known, 1)]]
-    listing = ", ".join(known)
-    if len(listing) > 250:  # the message, at most 500 characters, keeps its start
-        listing = f"{listing[:220].rsplit(', ', 1)[0]}, ... ({len(known)} in all)"
-    head = f"{owner} got unknown keyword argument(s) {', '.join(guesses[:4])}"
+    guesses = [f"{shown(k)} -> {shown(close[0])}" for k in list(unknown)[:4]
+               for close in [difflib.get_close_matches(str(k), known, 1)] if close]  # fmt: skip
+    head = f"{owner} got unknown keyword argument(s) {shown(list(unknown))}"
+    if guesses:
+        head += f" (did you mean {', '.join(guesses)}?)"
     if len(head) > 220:
         head = f"{head[:200]}..."
+    listing = ", ".join(known)
+    if len(listing) > 250:
+        listing = f"{listing[:220].rsplit(', ', 1)[0]}, ... ({len(known)} in all)"
     return f"{head}; known: {listing}"
 
 
@@ -248,3 +250,24 @@ def check_real(value: float, name: str) -> float:
     if not np.isfinite(v):
         raise ValueError(f"{name} = {shown(value)} must be a finite real number")
     return v
+
+
+def check_values(name: str, params: dict[str, Any], defaults: dict[str, Any]) -> None:
+    """Each parameter of the type its default has: a flag True or False, a real number finite
+    (converted to float in ``params``), a tuple of the default's shape and finite; a NaN
+    would only surface later, as an error naming no field. ``name`` is the scenario's."""
+    for key, default in defaults.items():
+        if isinstance(default, bool):
+            if not isinstance(params[key], (bool, np.bool_)):
+                raise ValueError(f"{name}.{key} = {shown(params[key])} must be True or False")
+        elif isinstance(default, float):
+            params[key] = check_real(params[key], f"{name}.{key}")
+        elif isinstance(default, tuple):
+            arr = real_array(params[key], f"{name}.{key}")
+            if arr.shape != np.shape(default):
+                raise ValueError(
+                    f"{name}.{key} = {shown(params[key])} has shape {arr.shape}, expected "
+                    f"{np.shape(default)}"
+                )
+            if not np.isfinite(arr).all():
+                raise ValueError(f"{name}.{key} = {shown(params[key])} must be finite")
