@@ -239,10 +239,22 @@ def _lists(M, keep):
 
 @njit(cache=True, parallel=True)
 def _stage(n, motion, theta, rules, W, symmetric, settings, out):
+    """:func:`_passes` with its chunks of agents in parallel."""
+    _passes(n, motion, theta, rules, W, symmetric, settings, out)
+
+
+@njit(cache=True)
+def _stage_serial(n, motion, theta, rules, W, symmetric, settings, out):
+    """:func:`_passes` on the calling thread, its chunks one after the other: on one thread
+    the faster form (a parallel region costs its launch even on one thread)."""
+    _passes(n, motion, theta, rules, W, symmetric, settings, out)
+
+
+@njit(cache=True, inline="always")
+def _passes(n, motion, theta, rules, W, symmetric, settings, out):
     """R-ORCA for every agent of envs of ``n`` (:func:`stage`), pass after pass, each over chunks
-    of agents in parallel: the grid and the data in cell order, each agent's K nearest and
-    capped preferred velocity, their pairs' weights, the solves (each clipped to the speed
-    limit)."""
+    of agents: the grid and the data in cell order, each agent's K nearest and capped
+    preferred velocity, their pairs' weights, the solves (each clipped to the speed limit)."""
     K = settings[0]
     M = motion[0].shape[0]
     blocks = (M + CHUNK - 1) // CHUNK
@@ -288,10 +300,10 @@ def stage(
     th = np.ascontiguousarray(theta, dtype=np.float64).reshape(M)
     K, u_max, tau, dt, cut = settings
     out = np.empty((M, 2))
-    # the grid stage serves envs beyond 64 agents, where the prange form is the faster on one
-    # thread too (threads.OUTLINED_THRESHOLD): its only form
-    work = max(M, threads.OUTLINED_THRESHOLD)
-    threads.launch(_stage, _stage, work, n, motion, th, rules, W,
-                   np.ascontiguousarray(symmetric, dtype=np.bool_),
-                   (int(K), float(u_max), float(tau), float(dt), float(cut)), out)  # fmt: skip
+    args = (n, motion, th, rules, W, np.ascontiguousarray(symmetric, dtype=np.bool_),
+            (int(K), float(u_max), float(tau), float(dt), float(cut)), out)  # fmt: skip
+    if threads.parallel(M):
+        threads.launch(_stage_serial, _stage, M, *args)
+    else:  # a parallel region costs its launch even on one thread
+        _stage_serial(*args)
     return out

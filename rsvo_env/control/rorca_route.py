@@ -32,6 +32,8 @@ CROWDED = 5  # stuck agents ahead that make an agent look for another heading
 TURN_COST = 0.05  # stuck agents a degree of turn is worth
 TURNS = (0.0, -30.0, 30.0, -60.0, 60.0, -90.0, 90.0)  # degrees, counterclockwise positive
 RH_HOLD = 5.0  # s: routed, the right-hand rule turns only agents stalled this long
+# each heading of TURNS as (cos, sin, |degrees|), what every probe reads
+_HEADINGS = (np.cos(np.deg2rad(TURNS)), np.sin(np.deg2rad(TURNS)), np.abs(np.array(TURNS)))
 
 
 def routed(
@@ -47,10 +49,11 @@ def routed(
     ``positions``, ``velocities``, ``goals``, ``preferred`` (E, N, 2), ``at_goal`` (E, N),
     ``scale`` the safety radius, ``speed`` the speed limit."""
     f = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
-    shape = np.shape(preferred)
     x, v, g, pref = f(positions), f(velocities), f(goals), f(preferred)
-    shapes = {"positions": x.shape, "velocities": v.shape, "goals": g.shape, "preferred": shape}
-    if len(set(shapes.values())) > 1 or not 2 <= len(shape) <= 3 or shape[-1] != 2:
+    shape = pref.shape
+    if not (x.shape == v.shape == g.shape == shape and 2 <= len(shape) <= 3 and shape[-1] == 2):
+        shapes = {"positions": x.shape, "velocities": v.shape, "goals": g.shape,
+                  "preferred": shape}  # fmt: skip
         raise ValueError(f"routed: {shapes} must be one shape, (E, N, 2) or (N, 2)")
     if np.shape(at_goal) != shape[:-1]:
         raise ValueError(f"routed: at_goal has shape {np.shape(at_goal)}, expected {shape[:-1]}")
@@ -58,11 +61,9 @@ def routed(
     E = 1 if x.ndim == 2 else x.shape[0]
     n = x.shape[-2]
     out = pref.reshape(E, n, 2).copy()
-    degrees = np.array(TURNS)
-    angles = np.deg2rad(degrees)
     _route(x.reshape(E, n, 2), v.reshape(E, n, 2), g.reshape(E, n, 2),
            np.ascontiguousarray(at_goal, np.bool_).reshape(E, n), scale, SLOW * speed,
-           np.cos(angles), np.sin(angles), np.abs(degrees), out)  # fmt: skip
+           *_HEADINGS, out)  # fmt: skip
     return out.reshape(shape)
 
 

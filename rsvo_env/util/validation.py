@@ -7,6 +7,7 @@ the offending value, and never repairs the input.
 from __future__ import annotations
 
 import difflib
+import math
 import reprlib
 from collections.abc import Iterable, Sequence
 from typing import Any
@@ -234,7 +235,7 @@ def check_positive(value: float, name: str) -> float:
         v = float(value)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name} = {shown(value)} must be a finite number > 0") from exc
-    if not np.isfinite(v) or v <= 0:
+    if not math.isfinite(v) or v <= 0:
         raise ValueError(f"{name} = {shown(value)} must be a finite number > 0")
     return v
 
@@ -247,7 +248,7 @@ def check_real(value: float, name: str) -> float:
         v = float(value)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name} = {shown(value)} must be a finite real number") from exc
-    if not np.isfinite(v):
+    if not math.isfinite(v):
         raise ValueError(f"{name} = {shown(value)} must be a finite real number")
     return v
 
