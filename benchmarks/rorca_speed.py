@@ -75,6 +75,33 @@ def stage_against_orca(n: int, blocks: int) -> dict:
             "still": still_s * per, "still_ratio": (rorca_s + still_s) / orca_s}  # fmt: skip
 
 
+def public_against_orca(n: int, blocks: int) -> dict:
+    """Microseconds per agent-step: ORCA's C++ step on its crowd against what a user calls,
+    ``BatchedEnv("crowd", num_envs=1, num_agents=n).nominal_actions()`` (R-ORCA's stage with
+    everything around it: move-to-goal, routing, the rules' clocks, the model's inputs and the
+    normalised actions), each in its own crowd of n after 30 steps."""
+    env = BatchedEnv("crowd", num_envs=1, num_agents=n)
+    env.reset(seed=0)
+    for _ in range(30):
+        env.step(env.nominal_actions())
+    orca = Orca(n)
+    for _ in range(20):
+        orca.step()
+    reps = max(3, 20_000 // n)
+    ours = theirs = 0.0
+    for _ in range(blocks):
+        t0 = time.perf_counter()
+        for _ in range(reps):
+            env.nominal_actions()
+        ours += time.perf_counter() - t0
+        orca.busy = 0.0
+        for _ in range(reps):
+            orca.step()
+        theirs += orca.busy
+    per = 1e6 / (blocks * reps * n)
+    return {"n": n, "orca": theirs * per, "public": ours * per, "ratio": ours / theirs}
+
+
 def env_steps(blocks: int, steps: int = 20, **kw) -> dict:
     """Agent-steps/s of the 16 x 256 crowd (the scenario's keywords ``kw``): a step with given
     actions, and a step with ``nominal_actions()`` computed first (R-ORCA, the crowd's
@@ -105,6 +132,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", default=str(RESULTS / "rorca_speed.md"))
     args = p.parse_args(argv)
     rows = [stage_against_orca(n, args.blocks) for n in args.sizes]
+    public = [public_against_orca(n, args.blocks) for n in args.sizes]
     env = env_steps(args.blocks)
     unrouted = env_steps(args.blocks, rorca_route=False)
     lines = [
@@ -122,6 +150,17 @@ def main(argv: list[str] | None = None) -> int:
         *(f"| {r['n']:,} | {r['orca']:.2f} | {r['rorca']:.2f} | {r['ratio']:.2f} |"
           f" {r['route']:.2f} | {r['routed_ratio']:.2f} | {r['still']:.2f} |"
           f" {r['still_ratio']:.2f} |" for r in rows),  # fmt: skip
+        "",
+        "What a user calls, `BatchedEnv(\"crowd\", num_envs=1, num_agents=N).nominal_actions()`"
+        " (R-ORCA's stage with all around it: move-to-goal, routing, the rules' clocks, the"
+        " model's inputs, the normalised actions), in the env's own crowd, against ORCA's C++"
+        " step in its crowd, alternating blocks:",
+        "",
+        "| N | ORCA's C++ step [us/agent-step] | `nominal_actions()` [us/agent-step] |"
+        " `nominal_actions()` / ORCA |",
+        "|---|---|---|---|",
+        *(f"| {r['n']:,} | {r['orca']:.2f} | {r['public']:.2f} | {r['ratio']:.2f} |"
+          for r in public),  # fmt: skip
         "",
         "Routing around knots (`rsvo_env.control.rorca_route`) timed on the same crowd, with its"
         " agents' velocities (ORCA's), and with every agent at rest: then every one counts as"

@@ -39,6 +39,8 @@ def a_file(tmp_path):
         (["reproduce", "--seed", "-3", "--quick"], ["-3"]),
         (["reproduce", "--readme", "{tmp}/none.md", "--quick"], ["none.md"]),
         (["simulate", "circular_swap", "--theta", "1", "1"], ["theta has 2 entries"]),
+        # the real reason, not "/proc: No such file or directory"
+        (["reproduce", "--out", "/proc/forbidden", "--quick"], ["/proc", "takes no new files"]),
     ],
 )
 def test_rsvo_user_errors_are_one_line_before_any_work(

@@ -16,14 +16,13 @@ cap) and reports the paired difference of completion times with its standard err
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from rsvo_env.cli.arguments import Parser, count, output_problem
+from rsvo_env.cli.arguments import HelpFormatter, Parser, count, output_problem
 from rsvo_env.util.validation import shown
 from training import config as configs
 from training.algorithms import algorithm_class
@@ -124,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
     p = Parser(
         prog="python -m training.evaluate",
         description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     p.add_argument("model", help="a model.zip (SB3) or checkpoint directory (RLlib) of a run")
     p.add_argument("--episodes", type=count(1), default=100)

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from rsvo_env.cli.arguments import Parser, count
+from rsvo_env.cli.arguments import HelpFormatter, Parser, count
 from rsvo_env.util.validation import shown
 from training import config as configs
 from training import tune_runs
@@ -62,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     p = Parser(
         prog="python -m training.sweep",
         description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     p.add_argument("--engine", choices=("rllib",), default="rllib")
     p.add_argument("--scenario", default="circular_swap")

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from rsvo_env.cli.arguments import Parser, count
+from rsvo_env.cli.arguments import HelpFormatter, Parser, count
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.util.validation import check_positive, shown
 from training import config as configs
@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     p = Parser(
         prog="python -m training.theta_search",
         description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     p.add_argument("--scenario", default="circular_swap")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")

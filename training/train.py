@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from rsvo_env.cli.arguments import Parser, count, output_problem
+from rsvo_env.cli.arguments import HelpFormatter, Parser, count, output_problem
 from training import config as configs
 from training.algorithms import algorithm_class
 
@@ -31,7 +31,7 @@ def parser() -> argparse.ArgumentParser:
     p = Parser(
         prog="python -m training.train",
         description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     p.add_argument("--scenario", default="circular_swap", help="its config: training/configs/")
     p.add_argument("--config", help="a config file instead of the scenario's")

@@ -5,6 +5,7 @@ exit status 2 and never a traceback after a whole episode."""
 from __future__ import annotations
 
 import argparse
+import errno
 import os
 import sys
 import tempfile
@@ -67,8 +68,23 @@ def _probe(path: Path, folder: Path, directory: bool) -> str | None:
             os.close(fd)
             os.remove(name)
     except OSError as err:
-        return f"{path} cannot be written: {folder}: {err.strerror or err}"
+        reason = err.strerror or str(err)
+        if err.errno == errno.ENOENT and folder.is_dir():
+            # the folder is there, yet "no such file": a file system that makes no new entries
+            reason = "it takes no new files (a virtual file system, such as /proc)"
+        return f"{path} cannot be written: {folder}: {reason}"
     return None
+
+
+class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
+    """Keeps the description's lines and shows each option's default once: not where the help
+    names it already, nor where there is none to show (None, a flag's False)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        if "default:" in text or action.default in (None, False, argparse.SUPPRESS):
+            return text
+        return super()._get_help_string(action)
 
 
 class UserError(ValueError):

@@ -1,6 +1,7 @@
 """rsvo demo: two agents swap places head-on through the R-CBF filter alone, on plain arrays
 (no environment): an egoist (theta 1) and an altruist (theta 4). Prints the smallest distance
-kept and how far each agent travelled; the egoist travels farther."""
+kept, when each agent arrived and how far each swerved: the egoist arrives first and swerves
+less, the altruist makes the room."""
 
 from __future__ import annotations
 
@@ -15,7 +16,9 @@ def head_on_swap(
     """Filter a move-to-goal controller for two agents that start facing each other.
 
     A small vertical offset lets the pair slide past each other instead of stopping dead.
-    Returns the smallest distance kept, the safety radius and the distance each agent travelled.
+    Returns the smallest distance kept, the safety radius, each agent's arrival time (the first
+    step within 0.05 m of its goal, in seconds; NaN if it did not arrive) and the largest
+    distance each strayed sideways from the line between the starts.
     """
     cfg = FilterConfig(gamma=5.0, safety_radius=1.0, u_max=2.0, dt=dt)
     flt = SafetyFilter(cfg)
@@ -23,20 +26,24 @@ def head_on_swap(
     goals = x[::-1] * np.array([1.0, -1.0])
     th = np.asarray(theta, dtype=float)
     min_dist = np.inf
-    travelled = np.zeros(2)
-    for _ in range(steps):
+    swerve, arrived = np.zeros(2), np.full(2, np.nan)
+    for step in range(steps):
         nominal = -2.0 * (x - goals)
         norm = np.linalg.norm(nominal, axis=1, keepdims=True)
         nominal *= np.minimum(1.0, cfg.u_max / np.maximum(norm, 1e-12))
         res = flt.filter(x, nominal, th)
         x = x + dt * res.actions
-        travelled += dt * np.linalg.norm(res.actions, axis=1)
+        swerve = np.maximum(swerve, np.abs(x[:, 1]))
+        home = np.isnan(arrived) & (np.linalg.norm(x - goals, axis=1) < 0.05)
+        arrived[home] = (step + 1) * dt
         min_dist = min(min_dist, float(np.linalg.norm(x[0] - x[1])))
     return {
         "min_distance": min_dist,
         "safety_radius": cfg.safety_radius,
-        "travelled_0": float(travelled[0]),
-        "travelled_1": float(travelled[1]),
+        "arrived_0": float(arrived[0]),
+        "arrived_1": float(arrived[1]),
+        "swerve_0": float(swerve[0]),
+        "swerve_1": float(swerve[1]),
     }
 
 
@@ -50,8 +57,9 @@ def main(argv: list[str] | None = None) -> int:
         f"  smallest distance kept: {out['min_distance']:.4f} m "
         f"(safety radius {out['safety_radius']:.1f} m)"
     )
+    print(f"  arrived: egoist at {out['arrived_0']:.2f} s, altruist at {out['arrived_1']:.2f} s")
     print(
-        f"  distance travelled: egoist {out['travelled_0']:.2f} m, "
-        f"altruist {out['travelled_1']:.2f} m"
+        f"  largest swerve from the line: egoist {out['swerve_0']:.2f} m, "
+        f"altruist {out['swerve_1']:.2f} m"
     )
     return 0 if out["min_distance"] >= out["safety_radius"] - 1e-9 else 1

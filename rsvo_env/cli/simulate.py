@@ -16,7 +16,14 @@ from pathlib import Path
 from typing import Any
 
 import rsvo_env
-from rsvo_env.cli.arguments import Parser, UserError, check_output, count, user_input
+from rsvo_env.cli.arguments import (
+    HelpFormatter,
+    Parser,
+    UserError,
+    check_output,
+    count,
+    user_input,
+)
 from rsvo_env.cli.episode import run
 from rsvo_env.cli.scene_file import read_scene
 from rsvo_env.scenarios.base import NOMINALS
@@ -49,10 +56,6 @@ def run_settings(args: argparse.Namespace, scene: dict[str, Any]) -> dict[str, A
     weighting = "asymmetric" if flags["weighting"] is None else flags["weighting"]
     return {"theta": flags["theta"], "weighting": weighting, "seed": seed,
             "safety_filter": safety_filter}  # fmt: skip
-
-
-class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
-    """Keeps the description's lines and shows every default."""
 
 
 def main(argv: list[str] | None = None) -> int:
