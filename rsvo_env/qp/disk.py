@@ -25,6 +25,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from rsvo_env.qp.least_violation import max_violation
+
 PARALLEL = 1e-13
 # a chord that rounds to a point is kept if no row is violated by more than ROOM r there
 ROOM = 1e-13
@@ -94,26 +96,18 @@ def _balanced(rows, k, r, root, lo, hi, ox, oy, dx, dy):
     a, b = max(hi, -root), min(lo, root)
     for _ in range(100):
         t1, t2 = a + (b - a) / 3.0, b - (b - a) / 3.0
-        if _worst(rows, k, ox + t1 * dx, oy + t1 * dy) <= _worst(rows, k, ox + t2 * dx,
-                                                                 oy + t2 * dy):  # fmt: skip
+        if max_violation(ox + t1 * dx, oy + t1 * dy, rows, k) <= max_violation(
+            ox + t2 * dx, oy + t2 * dy, rows, k
+        ):
             b = t2
         else:
             a = t1
     t = 0.5 * (a + b)
     x, y = ox + t * dx, oy + t * dy
     allowed = ROOM * r
-    if np.sqrt(x * x + y * y) - r > allowed or _worst(rows, k, x, y) > allowed:
+    if np.sqrt(x * x + y * y) - r > allowed or max_violation(x, y, rows, k) > allowed:
         return np.nan
     return t
-
-
-@njit(cache=True, inline="always")
-def _worst(rows, k, x, y):
-    """The largest violation ``a_m . (x, y) - b_m`` of the rows before k."""
-    worst = -np.inf
-    for m in range(k):
-        worst = max(worst, rows[m, 0] * x + rows[m, 1] * y - rows[m, 2])
-    return worst
 
 
 @njit(cache=True, inline="always")
