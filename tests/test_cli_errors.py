@@ -39,6 +39,12 @@ def a_file(tmp_path):
         (["reproduce", "--seed", "-3", "--quick"], ["-3"]),
         (["reproduce", "--readme", "{tmp}/none.md", "--quick"], ["none.md"]),
         (["simulate", "circular_swap", "--theta", "1", "1"], ["theta has 2 entries"]),
+        (["simulate", "crowd", "--num-agents", "-3"], ["--num-agents", "-3", ">= 2"]),
+        (["simulate", "crowd", "--num-agents", "2.5"], ["--num-agents", "2.5"]),
+        (["simulate", "crowd", "--max-steps", "0"], ["--max-steps", "0"]),
+        (["simulate", "crowd", "--dynamics", "bogus"], ["--dynamics", "bogus"]),
+        (["simulate", "ramp_merge", "--dynamics", "unicycle"], ["ramp_merge", "dynamics"]),
+        (["simulate", "position_swap", "--num-agents", "5"], ["exactly 2 agents", "5"]),
         # the real reason, not "/proc: No such file or directory"
         (["reproduce", "--out", "/proc/forbidden", "--quick"], ["/proc", "takes no new files"]),
     ],
@@ -227,3 +233,14 @@ def test_aliases_expand_to_at_most_a_million_values(tmp_path, capsys):
     assert exit_code(lambda: rsvo.main(["simulate", "custom", "--scene", str(scene)])) == 2
     line = one_error_line(capsys)
     assert "1,000,000 values" in line and len(line) < 200
+
+
+@pytest.mark.parametrize("dynamics", ["single_integrator", "double_integrator", "unicycle"])
+def test_simulate_reaches_every_model_from_the_command_line(capsys, dynamics):
+    """``rsvo simulate crowd --dynamics D --num-agents 12 --max-steps 300`` runs each model:
+    300 steps of 12 agents, no contact."""
+    args = ["simulate", "crowd", "--dynamics", dynamics, "--num-agents", "12", "--max-steps", "300"]
+    assert rsvo.main(args) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    out = {k.strip(): v.strip() for k, v in (line.split(":", 1) for line in lines)}
+    assert int(out["steps"]) == 300 and int(out["n_collision_steps"]) == 0

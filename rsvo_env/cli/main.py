@@ -24,6 +24,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = Parser(
         prog="rsvo", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
+    from rsvo_env import __version__
+
+    parser.add_argument("--version", action="version", version=f"rsvo {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, text in COMMANDS.items():
         sub.add_parser(name, help=text, add_help=False)

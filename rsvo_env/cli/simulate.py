@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import rsvo_env
+from rsvo_env import dynamics
 from rsvo_env.cli.arguments import (
     HelpFormatter,
     Parser,
@@ -93,6 +94,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--seed", type=count(0), default=argparse.SUPPRESS,
                     help="seed of the episode (default: 0)")  # fmt: skip
+    ap.add_argument("--dynamics", choices=dynamics.NAMES,
+                    help="the agents' model, in the scenes that take one (default: the scene's)")
+    ap.add_argument("--num-agents", type=count(2), metavar="N",
+                    help="how many agents, in the scenes laid out for any number (default: the "
+                    "scene's)")
+    ap.add_argument("--max-steps", type=count(1), metavar="STEPS",
+                    help="the episode's step cap (default: the scene's)")  # fmt: skip
     ap.add_argument("--gif", type=Path, help="write an animated GIF here (.gif)")
     ap.add_argument("--png", type=Path, help="write a trajectory figure here (.png)")
     args = ap.parse_args(argv)
@@ -105,10 +113,15 @@ def main(argv: list[str] | None = None) -> int:
     if args.scene is not None:
         with user_input():
             scene = read_scene(args.scene)
-        if "nominal" in scene and args.nominal is not None:
-            raise UserError("the controller is given twice: --nominal and the scene's nominal")
-    out = run(args.scenario, gif=args.gif, **run_settings(args, scene),
-              **({} if args.nominal is None else {"nominal": args.nominal}), **scene)  # fmt: skip
+    # the scene's own keywords given by flag, each at most once
+    for key, flag in (("nominal", "--nominal"), ("dynamics", "--dynamics"),
+                      ("num_agents", "--num-agents"), ("max_steps", "--max-steps")):  # fmt: skip
+        value = getattr(args, key)
+        if value is not None:
+            if key in scene:
+                raise UserError(f"{key} is given twice: {flag} and the scene file's {key}")
+            scene[key] = value
+    out = run(args.scenario, gif=args.gif, **run_settings(args, scene), **scene)
     for key in (
         "steps",
         "success",
