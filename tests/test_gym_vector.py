@@ -7,6 +7,7 @@ import torch
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.wrappers.vector import ClipAction, NormalizeObservation, RecordEpisodeStatistics
 
+from rsvo_env.envs import registration
 from rsvo_env.envs.vector import BatchedEnv
 from wrappers import GymnasiumVectorEnv
 
@@ -158,3 +159,57 @@ def test_cleanrl_style_ppo_trains_through_the_wrappers():
     assert all(np.isfinite(returns))  # every iteration finished episodes (82 > 2 x 41 steps)
     # progress toward the goal is rewarded: the policy learns to move its agents there
     assert np.mean(returns[-3:]) > np.mean(returns[:3])
+
+
+IDS = sorted(registration.IDS)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_make_vec_vector_entry_point_is_the_sync_vector_of_gymnasium_make(env_id):
+    """``make_vec(id, 4, vectorization_mode="vector_entry_point")`` (it raised "doesn't have a
+    vector entry point defined") is the batched core with the spaces of ``gymnasium.make(id)``
+    and, step by step, the episodes of a ``SyncVectorEnv`` of them: observations, summed
+    rewards, flags and ``cost``, through a truncation and Gymnasium's next-step autoreset."""
+    import gymnasium
+
+    kwargs = {"max_steps": 6}
+    vec = gymnasium.make_vec(env_id, 4, vectorization_mode="vector_entry_point", **kwargs)
+    sync = gymnasium.make_vec(env_id, 4, vectorization_mode="sync", **kwargs)
+    assert isinstance(vec, VectorEnv) and type(vec).__name__ == "JointVectorEnv"
+    assert vec.single_observation_space == sync.single_observation_space
+    assert vec.single_action_space == sync.single_action_space
+    assert vec.metadata["autoreset_mode"] == sync.metadata["autoreset_mode"] == (
+        AutoresetMode.NEXT_STEP)
+    got, want = vec.reset(seed=3)[0], sync.reset(seed=3)[0]
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-6)
+    rng = np.random.default_rng(0)
+    ended = 0
+    for _ in range(15):
+        a = rng.uniform(-1, 1, vec.action_space.shape).astype(np.float32)
+        ours, theirs = vec.step(a), sync.step(a)
+        assert vec.observation_space.contains(ours[0])
+        np.testing.assert_allclose(ours[0], theirs[0], rtol=0, atol=1e-6)
+        np.testing.assert_allclose(ours[1], theirs[1], rtol=1e-9, atol=1e-9)
+        np.testing.assert_array_equal(ours[2], theirs[2])
+        np.testing.assert_array_equal(ours[3], theirs[3])
+        np.testing.assert_allclose(ours[4]["cost"], theirs[4]["cost"])
+        assert ours[4]["_cost"].all()
+        ended += int((ours[2] | ours[3]).sum())
+    assert ended >= 8  # two truncations of every env, autoreset between
+    vec.close()
+    sync.close()
+
+
+def test_make_vec_takes_the_filter_switch_and_refuses_drawing():
+    import gymnasium
+
+    vec = gymnasium.make_vec("rsvo/Crowd-v0", 2, vectorization_mode="vector_entry_point",
+                             safety_filter=False, num_agents=6)  # fmt: skip
+    assert not vec.unwrapped.env.sim.filters
+    assert vec.reset(seed=0)[0].shape == (2, vec.single_observation_space.shape[0])
+    with pytest.raises(ValueError, match="render_mode"):
+        gymnasium.make_vec("rsvo/Crowd-v0", 2, vectorization_mode="vector_entry_point",
+                           render_mode="rgb_array")  # fmt: skip
+    stats = RecordEpisodeStatistics(vec)
+    stats.reset(seed=1)
+    stats.step(np.zeros(vec.action_space.shape, dtype=np.float32))

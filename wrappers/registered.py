@@ -7,6 +7,7 @@ from typing import Any
 
 from rsvo_env.util.validation import shown
 from wrappers.joint import JointControlEnv
+from wrappers.joint_vector import JointVectorEnv
 from wrappers.safety_filter import filtered_aec_env, filtered_parallel_env
 
 
@@ -26,6 +27,18 @@ def _scenario(id_scenario: str, kwargs: dict[str, Any]) -> str:
 def joint_env(id_scenario: str, **kwargs: Any) -> JointControlEnv:
     """gymnasium's entry point: :class:`wrappers.joint.JointControlEnv` of the id's scenario."""
     return JointControlEnv(_scenario(id_scenario, kwargs), **kwargs)
+
+
+def joint_vector_env(
+    id_scenario: str, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs: Any
+) -> JointVectorEnv:
+    """gymnasium's vector entry point (``make_vec(id, E, vectorization_mode=
+    "vector_entry_point")``): :class:`wrappers.joint_vector.JointVectorEnv` of the id's
+    scenario, E envs of the batched core; the spec's ``max_episode_steps`` is the step cap
+    unless ``max_steps`` is given."""
+    if max_episode_steps is not None and "max_cycles" not in kwargs:
+        kwargs.setdefault("max_steps", max_episode_steps)
+    return JointVectorEnv(_scenario(id_scenario, kwargs), num_envs=num_envs, **kwargs)
 
 
 def parallel_env(id_scenario: str, **kwargs: Any):

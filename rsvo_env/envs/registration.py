@@ -52,6 +52,7 @@ def register_all() -> None:
             gymnasium.register(
                 id=env_id,
                 entry_point="wrappers.registered:joint_env",
+                vector_entry_point="wrappers.registered:joint_vector_env",
                 kwargs=kwargs,
                 max_episode_steps=SCENARIOS[scenario].defaults["max_steps"],
             )
