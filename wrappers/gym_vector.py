@@ -25,7 +25,21 @@ from rsvo_env.util.validation import shown
 MODES = {"same_step": AutoresetMode.SAME_STEP, "next_step": AutoresetMode.NEXT_STEP}
 
 
-class GymnasiumVectorEnv(VectorEnv):
+class OverBatched(VectorEnv):
+    """A ``gymnasium.vector.VectorEnv`` over a ``BatchedEnv`` (``self.env``): the vector env is
+    its own unwrapped env, and closing it closes the batch."""
+
+    env: BatchedEnv
+
+    @property
+    def unwrapped(self) -> OverBatched:
+        return self
+
+    def close_extras(self, **kwargs: Any) -> None:
+        self.env.close()
+
+
+class GymnasiumVectorEnv(OverBatched):
     """``GymnasiumVectorEnv(BatchedEnv(...))``, or ``GymnasiumVectorEnv("crowd", num_envs=4,
     **kwargs)`` (a ``BatchedEnv`` made with ``autoreset_mode="next_step"`` unless given).
 
@@ -97,13 +111,6 @@ class GymnasiumVectorEnv(VectorEnv):
             out[key] = v.reshape(E * N, *v.shape[2:]) if per_agent else np.repeat(v, N, axis=0)
             out[f"_{key}"] = np.ones(self.num_envs, dtype=bool)
         return out
-
-    @property
-    def unwrapped(self) -> GymnasiumVectorEnv:
-        return self
-
-    def close_extras(self, **kwargs: Any) -> None:
-        self.env.close()
 
 
 __all__ = ["GymnasiumVectorEnv"]

@@ -16,16 +16,15 @@ from typing import Any
 
 import gymnasium
 import numpy as np
-from gymnasium.vector import VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.util.validation import shown
-from wrappers.gym_vector import MODES
+from wrappers.gym_vector import MODES, OverBatched
 
 
-class JointVectorEnv(VectorEnv):
+class JointVectorEnv(OverBatched):
     """``JointVectorEnv("crowd", num_envs=64, **kwargs)``: ``kwargs`` are ``BatchedEnv``'s (every
     keyword of the scenario and the filter; ``safety_filter=False`` turns the filter off), the
     autoreset mode ``"next_step"`` (Gymnasium's default) unless given. ``reset(seed=s)`` seeds
@@ -96,13 +95,6 @@ class JointVectorEnv(VectorEnv):
     def nominal_action(self) -> NDArray[np.float32]:
         """The scripted controller's joint actions (E, A N)."""
         return self._joint(self.env.nominal_actions())
-
-    @property
-    def unwrapped(self) -> JointVectorEnv:
-        return self
-
-    def close_extras(self, **kwargs: Any) -> None:
-        self.env.close()
 
 
 __all__ = ["JointVectorEnv"]
