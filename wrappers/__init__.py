@@ -3,6 +3,7 @@
 from rsvo_env.util.validation import shown
 from wrappers.gym_vector import GymnasiumVectorEnv
 from wrappers.joint import JointControlEnv
+from wrappers.joint_vector import JointVectorEnv
 from wrappers.residual import ResidualAction
 from wrappers.safety_filter import RCBFSafetyFilter, filtered_aec_env, filtered_parallel_env
 from wrappers.weighting import ResponsibilityWeighting
@@ -10,6 +11,7 @@ from wrappers.weighting import ResponsibilityWeighting
 __all__ = [
     "GymnasiumVectorEnv",
     "JointControlEnv",
+    "JointVectorEnv",
     "RCBFSafetyFilter",
     "ResidualAction",
     "ResponsibilityWeighting",
