@@ -11,6 +11,7 @@ from typing import Any
 
 from rsvo_env.envs import registration  # noqa: E402,F401  (registers the ids on import)
 from rsvo_env.envs.parallel import RSVOParallelEnv
+from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.filter.safety import FilterConfig, FilterResult, SafetyFilter
 from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.responsibility.svo import r_svo, responsibility_weight, weight_matrix
@@ -34,6 +35,7 @@ def env(scenario: str = "circular_swap", **kwargs: Any):
 
 __all__ = [
     "SCENARIOS",
+    "BatchedEnv",
     "FilterConfig",
     "FilterResult",
     "Obstacles",
