@@ -247,7 +247,12 @@ class Scenario:
     def radii(self) -> NDArray[np.float64]:
         """(N,) body radii: ``safety_radius / 2`` each (a pair safe at ``safety_radius``),
         unless the scenario gives its own."""
-        return np.full(self.num_agents, 0.5 * self.params["safety_radius"])
+        key = (self.num_agents, self.params["safety_radius"])
+        if self.__dict__.get("_even_radii_key") != key:  # built once: every scripted step reads it
+            radii = np.full(self.num_agents, 0.5 * self.params["safety_radius"])
+            radii.flags.writeable = False
+            self.__dict__["_even_radii"], self.__dict__["_even_radii_key"] = radii, key
+        return self.__dict__["_even_radii"]
 
     @property
     def agent_limits(self) -> NDArray[np.float64] | None:
