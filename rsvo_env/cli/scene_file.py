@@ -55,10 +55,11 @@ def load_yaml(text: Any) -> Any:
 
 def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     """JSON's object hook: a key given twice is refused."""
-    keys = [k for k, _ in pairs]
-    for k in keys:
-        if keys.count(k) > 1:
+    seen: set[str] = set()
+    for k, _ in pairs:
+        if k in seen:
             raise ValueError(f"the key {shown(k)} is given twice")
+        seen.add(k)
     return dict(pairs)
 
 
