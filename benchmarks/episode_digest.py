@@ -19,10 +19,11 @@ from typing import Any
 
 import numpy as np
 
+from rsvo_env import wrappers
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import rsvo_env  # noqa: E402
-import wrappers  # noqa: E402
 from rsvo_env.envs.vector import BatchedEnv  # noqa: E402
 
 STEPS = 300

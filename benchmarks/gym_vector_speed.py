@@ -1,5 +1,5 @@
 """Gymnasium's vector entry point against its sync mode: ``gymnasium.make_vec(id, 64,
-vectorization_mode="vector_entry_point")`` (the batched core, ``wrappers.JointVectorEnv``)
+vectorization_mode="vector_entry_point")`` (the batched core, ``rsvo_env.wrappers.JointVectorEnv``)
 against ``vectorization_mode="sync"`` (64 ``gymnasium.make(id)`` envs stepped one by one), for
 every registered id, the filter on, random joint actions. One process, alternating blocks of
 steps, the ratio of the env-steps per second. Writes benchmarks/results/gym_vector_speed.md.

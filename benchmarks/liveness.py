@@ -228,18 +228,19 @@ def rotated(
 def learned(run: Path) -> list[str]:
     """The learned residual of ``run`` (trained on the crowd with R-ORCA under it) evaluated at
     the size it was trained at and in crowds of 100 and 1,000, beside the scripted controller on
-    the same seeds (``training.evaluate`` with ``--set env.num_agents=N``)."""
-    from training.evaluate import evaluate_loaded, load_model
+    the same seeds (``rsvo_env.training.evaluate`` with ``--set env.num_agents=N``)."""
+    from rsvo_env.training.evaluate import evaluate_loaded, load_model
 
     model = run / "best_model.zip"
     lines = [
         LEARNED_HEADING,
         "",
         f"Written by `python benchmarks/liveness.py --learned {run}` after"
-        f" `python -m training.train --scenario crowd --set env.nominal=rorca --set stall_gate=5"
-        f" --set validation.episodes=100 --seed 0 --out {run}`: the residual policy trained on"
-        " crowds of 12 (the config `training/configs/crowd.yaml`: dt 0.1, gamma dt = 1, theta"
-        " 1..10) with R-ORCA under it and a stall gate of 5 s (an agent that has come no closer"
+        f" `python -m rsvo_env.training.train --scenario crowd --set env.nominal=rorca"
+        f" --set stall_gate=5 --set validation.episodes=100 --seed 0 --out {run}`: the residual"
+        " policy trained on crowds of 12 (the config `training/configs/crowd.yaml`: dt 0.1,"
+        " gamma dt = 1, theta 1..10) with R-ORCA under it and a stall gate of 5 s (an agent"
+        " that has come no closer"
         " to its goal for 5 s follows R-ORCA alone until it does), its validation-best model"
         " evaluated unchanged in larger crowds (its observation is local), seeds 1000 and up,"
         " against the scripted controller (R-ORCA, a zero residual) on the same seeds. Success:"

@@ -3,9 +3,9 @@ learned online, written to benchmarks/results/personalities.md with figures of l
 
 The searches run in the ``distributed`` venv (Ray Tune, Optuna), the rest in the main one:
 
-    python -m training.theta_search --trials 300 --out runs/search_c6
-    python -m training.theta_search --set num_agents=12 --trials 300 --out runs/search_c12
-    python -m training.theta_search --scenario doorway --seeds 0 1 2 3 4 --trials 200 \
+    python -m rsvo_env.training.theta_search --trials 300 --out runs/search_c6
+    python -m rsvo_env.training.theta_search --set num_agents=12 --trials 300 --out runs/search_c12
+    python -m rsvo_env.training.theta_search --scenario doorway --seeds 0 1 2 3 4 --trials 200 \
         --out runs/search_doorway
     python benchmarks/personalities.py --search runs/search_c6 runs/search_c12 \
         runs/search_doorway --runs runs
@@ -18,7 +18,7 @@ crowds'), each in place of its namesake in the results file, e.g. after a change
 The learned sections need the training runs whose commands the results file lists (circular
 game and crowd, three variants, three training seeds each); a missing run leaves its section
 out. Fixed assignments run the scripted controller behind the filter
-(``training.personalities``); learned ones each config's residual policy.
+(``rsvo_env.training.personalities``); learned ones each config's residual policy.
 """
 
 from __future__ import annotations
@@ -33,10 +33,10 @@ import numpy as np
 from liveness_report import replace_section  # a sibling module: benchmarks/ is the path
 
 from rsvo_env.envs.vector import BatchedEnv
-from training.config import limit_threads
-from training.evaluate import load_model
-from training.evaluation import run_episodes
-from training.personalities import alternating, evaluate
+from rsvo_env.training.config import limit_threads
+from rsvo_env.training.evaluate import load_model
+from rsvo_env.training.evaluation import run_episodes
+from rsvo_env.training.personalities import alternating, evaluate
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results"
@@ -257,7 +257,7 @@ def learned_section(runs: Path, scenario: str, lines: list[str]) -> bool:
         )
     lines += ["", "Commands (S = 0, 1, 2):", ""]
     lines += [
-        f"- `python -m training.train --scenario {scenario} {FLAGS[v]} --seed S"
+        f"- `python -m rsvo_env.training.train --scenario {scenario} {FLAGS[v]} --seed S"
         f"{study['budget']} --out runs/{name.format(s='S')}`"
         for v, name in study["names"].items()
     ]
@@ -268,7 +268,7 @@ def learned_section(runs: Path, scenario: str, lines: list[str]) -> bool:
 def theta_trace(run: Path, seed: int) -> dict[str, Any]:
     """One held-out episode of a learned theta policy: each agent's theta (T, N), its distance
     to its goal (T, N), the step length and the theta range."""
-    from training.config import make_env
+    from rsvo_env.training.config import make_env
 
     policy, cfg = load_model(run / "best_model.zip")
     env = make_env(cfg, num_envs=1, autoreset_mode="next_step")

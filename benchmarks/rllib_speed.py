@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from training import config as configs
-from training.rllib_engine import build
-from training.rllib_env import RSVOMultiAgentEnv
+from rsvo_env.training import config as configs
+from rsvo_env.training.rllib_engine import build
+from rsvo_env.training.rllib_env import RSVOMultiAgentEnv
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -31,10 +31,10 @@ from pathlib import Path
 
 import numpy as np
 
-from training import config as configs
-from training.config import limit_threads
-from training.evaluate import load_model
-from training.evaluation import run_episodes, scripted_policy, summarize
+from rsvo_env.training import config as configs
+from rsvo_env.training.config import limit_threads
+from rsvo_env.training.evaluate import load_model
+from rsvo_env.training.evaluation import run_episodes, scripted_policy, summarize
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
@@ -55,7 +55,7 @@ METHODS = {
 def command(scenario: str, method: str, seed: int, out: Path) -> list[str]:
     sets = [a for s in METHODS[method][1] for a in ("--set", s)]
     return [
-        sys.executable, "-m", "training.train", "--scenario", scenario, *sets,
+        sys.executable, "-m", "rsvo_env.training.train", "--scenario", scenario, *sets,
         "--timesteps", str(BUDGET[scenario]), "--seed", str(seed), "--no-progress",
         "--out", str(out),
     ]  # fmt: skip

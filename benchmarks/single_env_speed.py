@@ -26,7 +26,7 @@ from collections.abc import Callable
 import numpy as np
 
 import rsvo_env
-import wrappers
+from rsvo_env import wrappers
 
 
 def rate(step: Callable[[], None], agents: int, seconds: float) -> float:

@@ -1,8 +1,8 @@
 """Evaluate the training runs of issue-level experiments and write benchmarks/results/training.md.
 
 The runs are made first with the commands printed in the report (``RUNS`` below, each a plain
-``python -m training.train`` call); this script evaluates each run's ``best_model.zip`` (chosen
-on the validation seeds 900000+) on 100 held-out seeds 1000..1099 against the scripted
+``python -m rsvo_env.training.train`` call); this script evaluates each run's ``best_model.zip``
+(chosen on the validation seeds 900000+) on 100 held-out seeds 1000..1099 against the scripted
 controller, and embeds ``training_speed.md`` (``benchmarks/training_speed.py``).
 
     python benchmarks/training_results.py --runs runs
@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from training.config import limit_threads
-from training.evaluate import load_model
-from training.evaluation import (
+from rsvo_env.training.config import limit_threads
+from rsvo_env.training.evaluate import load_model
+from rsvo_env.training.evaluation import (
     evaluation_cap,
     paired,
     run_episodes,
@@ -31,7 +31,7 @@ from training.evaluation import (
 ROOT = Path(__file__).resolve().parents[1]
 EPISODES, SEED = 100, 1000
 GIF = "learned_circular.gif"
-TRAIN = "python -m training.train"
+TRAIN = "python -m rsvo_env.training.train"
 RUNS = {
     "circular_residual": f"{TRAIN} --scenario circular_swap --action residual --seed 0 "
     "--time-limit 600 --out runs/circular_residual",
@@ -139,7 +139,7 @@ def main() -> int:
         f"`best_model.zip` (chosen on the validation seeds 900000+) is evaluated on {EPISODES} "
         f"held-out seeds {SEED}..{SEED + EPISODES - 1} with the filter on, against the scripted "
         "controller on the same seeds (same dt, speed limit, filter and time cap): "
-        "`python -m training.evaluate runs/NAME/best_model.zip --episodes 100 --seed 1000 "
+        "`python -m rsvo_env.training.evaluate runs/NAME/best_model.zip --episodes 100 --seed 1000 "
         "--compare-scripted`. Completion: the first time every agent is at its goal, over "
         "successful episodes; the paired difference is over the seeds both finish.",
         "",
@@ -161,7 +161,8 @@ def main() -> int:
             f"![the learned residual policy, seed {SEED}]({GIF})",
             "",
             f"`{GIF}`: `circular_residual` on held-out seed {SEED} (written by "
-            f"`python -m training.evaluate runs/circular_residual/best_model.zip --episodes 1 "
+            f"`python -m rsvo_env.training.evaluate runs/circular_residual/best_model.zip "
+            "--episodes 1 "
             f"--seed {SEED} --gif benchmarks/results/{GIF}`), played in real time: the six "
             "agents (colour: theta, red egoist to blue altruist) go round one another in a "
             "roundabout instead of meeting in the middle as the scripted controller does.",
@@ -324,8 +325,9 @@ def rllib_section(runs: Path) -> list[str]:
             "",
             "```bash",
             RLLIB_RUN,
-            "python -m training.evaluate runs/rllib_circular/best_checkpoint --episodes 100 "
-            "--seed 1000 --compare-scripted --out runs/rllib_circular/evaluation.json",
+            "python -m rsvo_env.training.evaluate runs/rllib_circular/best_checkpoint "
+            "--episodes 100 --seed 1000 --compare-scripted "
+            "--out runs/rllib_circular/evaluation.json",
             "```",
             "",
             f"{t['agent_steps'] / 1e6:.2f} M agent-steps in {t['seconds']:.0f} s of wall time "
@@ -369,8 +371,9 @@ RLLIB_RUN = (
     "--set validation.every=100000 --out runs/rllib_circular"
 )
 SWEEP = (
-    "python -m training.sweep --engine rllib --scenario circular_swap --weightings asymmetric "
-    "symmetric --thetas random paper --seeds 0 1 --timesteps 100000 --episodes 100 "
+    "python -m rsvo_env.training.sweep --engine rllib --scenario circular_swap "
+    "--weightings asymmetric symmetric --thetas random paper --seeds 0 1 --timesteps 100000 "
+    "--episodes 100 "
     "--out runs/sweep"
 )
 

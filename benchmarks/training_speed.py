@@ -31,8 +31,8 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import VecMonitor
 
 from rsvo_env.filter.safety import SafetyFilter
-from training import config as configs
-from wrappers.sb3 import SB3VecEnv
+from rsvo_env.training import config as configs
+from rsvo_env.wrappers.sb3 import SB3VecEnv
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -77,8 +77,8 @@ print(obs.shape, reward)
 ```
 
 One policy per agent: `pettingzoo.make("parallel", "{env_id}")` or
-`rsvo_env.parallel_env("{scenario}")` (the filter off) behind `wrappers.RCBFSafetyFilter`; many
-envs at once: `BatchedEnv("{scenario}", num_envs=...)` ([Many envs at once](../batched.md)).
+`rsvo_env.parallel_env("{scenario}")` (the same env; `safety_filter=False` turns the filter off);
+many envs at once: `BatchedEnv("{scenario}", num_envs=...)` ([Many envs at once](../batched.md)).
 
 ## Parameters
 

@@ -1,8 +1,11 @@
 """rsvo-env: responsibility-associated multi-agent collision avoidance with social preferences.
 
-``rsvo_env.parallel_env(scenario, **kwargs)`` makes the PettingZoo ParallelEnv (no filter; add
-``wrappers.RCBFSafetyFilter``), ``rsvo_env.env(...)`` its AEC version. The standalone filter is
-``rsvo_env.SafetyFilter`` (module ``rsvo_env.safety``).
+Every entry point filters every action through the R-CBF safety filter unless it is given
+``safety_filter=False``: ``rsvo_env.parallel_env(scenario, **kwargs)`` (the PettingZoo
+ParallelEnv), ``rsvo_env.env(...)`` (its AEC version), ``rsvo_env.BatchedEnv`` (many envs as
+arrays), ``gymnasium.make("rsvo/...")`` and ``pettingzoo.make``. The filter alone, on plain
+arrays, is ``rsvo_env.SafetyFilter``. The wrappers are ``rsvo_env.wrappers``, training is
+``rsvo_env.training`` (the ``train`` extra).
 """
 
 from __future__ import annotations
@@ -17,20 +20,25 @@ from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.responsibility.svo import r_svo, responsibility_weight, weight_matrix
 from rsvo_env.scenarios import SCENARIOS, make_scenario
 
-__version__ = "0.1.0"
+__version__ = "1.0.0"
 
 
-def parallel_env(scenario: str = "circular_swap", **kwargs: Any) -> RSVOParallelEnv:
-    """The scenario as a PettingZoo ParallelEnv, without a safety filter."""
-    return RSVOParallelEnv(scenario, **kwargs)
+def parallel_env(
+    scenario: str = "circular_swap", safety_filter: bool = True, **kwargs: Any
+) -> RSVOParallelEnv:
+    """The scenario as a PettingZoo ParallelEnv, every action through the safety filter unless
+    ``safety_filter=False``. ``kwargs``: the filter's (``gamma``, ``solver``, ``barrier``,
+    ``split``, ``neighbor_radius``, ``intervention_penalty``), the env's and the scenario's
+    keywords (:class:`RSVOParallelEnv`)."""
+    return RSVOParallelEnv(scenario, safety_filter=safety_filter, **kwargs)
 
 
-def env(scenario: str = "circular_swap", **kwargs: Any):
-    """The AEC version, through PettingZoo's ``parallel_to_aec`` converter (actions checked when
-    they are submitted)."""
+def env(scenario: str = "circular_swap", safety_filter: bool = True, **kwargs: Any) -> Any:
+    """The AEC version of :func:`parallel_env` (the same keywords), through PettingZoo's
+    ``parallel_to_aec`` converter (actions checked when they are submitted)."""
     from rsvo_env.envs.parallel import aec_from_parallel
 
-    return aec_from_parallel(parallel_env(scenario, **kwargs))
+    return aec_from_parallel(parallel_env(scenario, safety_filter, **kwargs))
 
 
 __all__ = [

@@ -8,6 +8,7 @@ import pytest
 from backup_states import pair_h
 from test_backup_barrier import config
 
+import rsvo_env
 from rsvo_env.dynamics import backup_barrier as bb
 from rsvo_env.dynamics import double_integrator_step
 from rsvo_env.filter.safety import SafetyFilter
@@ -74,17 +75,14 @@ def test_a_packed_hexagon_driven_by_its_scene_controller_stays_feasible():
     """The custom scene of 19 touching double integrators at rest, radius 1, dt 0.5, gamma 2
     (gamma dt = 1), driven by the scene's own scripted controller toward shuffled goals across
     the cluster: no infeasible agent-step, no contact."""
-    import rsvo_env
-    import wrappers
-
     starts = hexagon() * 2.0 * (1.0 + 1e-15)  # the lattice's rounding kept outside contact
     infeasible, cost = 0, 0.0
     for seed in range(6):
         rng = np.random.default_rng(seed)
         goals = starts[rng.permutation(19)] * 1.5 + rng.uniform(-0.5, 0.5, (19, 2))
-        env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(
+        env = rsvo_env.parallel_env(
             "custom", starts=starts, goals=goals, radii=np.ones(19), dynamics="double_integrator",
-            dt=0.5, gamma=2.0, max_steps=120))  # fmt: skip
+            dt=0.5, gamma=2.0, max_steps=120)  # fmt: skip
         env.reset(seed=seed, options={"theta": rng.uniform(1, 10, 19)})
         while env.agents:
             *_, infos = env.step(env.unwrapped.nominal_actions())

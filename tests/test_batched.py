@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 import rsvo_env
-import wrappers
 from rsvo_env.envs.vector import BatchedEnv
 
 SIGNALS = (
@@ -48,9 +47,7 @@ def check_batch_equals_singles(name, filtered, kwargs, steps):
     batch's width (theta actions too), every signal, reward, end and final observation."""
     E, seed = 3, 11
     venv = BatchedEnv(name, num_envs=E, safety_filter=filtered, **kwargs)
-    singles = [rsvo_env.parallel_env(name, **kwargs) for _ in range(E)]
-    if filtered:
-        singles = [wrappers.RCBFSafetyFilter(env) for env in singles]
+    singles = [rsvo_env.parallel_env(name, safety_filter=filtered, **kwargs) for _ in range(E)]
     obs, info = venv.reset(seed=seed)
     agents = singles[0].possible_agents
     for e, env in enumerate(singles):

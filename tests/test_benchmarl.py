@@ -11,7 +11,7 @@ from benchmarl.experiment import Experiment, ExperimentConfig
 from benchmarl.models.mlp import MlpConfig
 from torchrl.envs.libs.pettingzoo import PettingZooWrapper
 
-from wrappers.safety_filter import filtered_parallel_env
+import rsvo_env
 
 AGENTS, STEPS = 4, 50
 
@@ -21,7 +21,7 @@ class CrowdTask(PettingZooClass):
 
     def get_env_fun(self, num_envs, continuous_actions, seed, device):
         return lambda: PettingZooWrapper(
-            filtered_parallel_env(scenario="crowd", num_agents=AGENTS, max_steps=STEPS),
+            rsvo_env.parallel_env("crowd", num_agents=AGENTS, max_steps=STEPS),
             categorical_actions=False,
             return_state=True,
             seed=seed,

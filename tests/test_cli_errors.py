@@ -7,10 +7,11 @@ import copy
 import pytest
 
 from rsvo_env.cli import main as rsvo
-from rsvo_env.cli import scene_file, simulate
+from rsvo_env.cli import simulate
 from rsvo_env.envs.parallel import RSVOParallelEnv
-from training import config as configs
-from training import evaluate, train
+from rsvo_env.training import config as configs
+from rsvo_env.training import evaluate, train
+from rsvo_env.util import scene_file
 
 
 def one_error_line(capsys):
@@ -156,7 +157,7 @@ def test_every_shipped_config_passes_its_schema():
     ],
 )
 def test_sweep_refuses_bad_arguments_before_any_trial(tmp_path, a_file, capsys, extra, words):
-    from training import sweep
+    from rsvo_env.training import sweep
 
     extra = [a.format(afile=a_file) for a in extra]
     out = [] if "--out" in extra else ["--out", str(tmp_path / "sweep")]

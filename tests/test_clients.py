@@ -6,11 +6,10 @@ import warnings
 import numpy as np
 
 import rsvo_env
-import wrappers
 
 
 def filtered(name="position_swap", **kwargs):
-    return wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, **kwargs))
+    return rsvo_env.parallel_env(name, **kwargs)
 
 
 def test_pettingzoo_max_cycles_test():

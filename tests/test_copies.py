@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rsvo_env
-import wrappers
+from rsvo_env import wrappers
 from rsvo_env.envs.vector import BatchedEnv
 
 
@@ -66,7 +66,7 @@ def parallel_roll(env, steps):
     [("ramp_merge", {"max_steps": 30}), ("circular_swap", {"max_steps": 40})],
 )
 def test_parallel_copy_goes_on_as_the_original(scenario, kwargs):
-    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(scenario, **kwargs))
+    env = rsvo_env.parallel_env(scenario, **kwargs)
     env.reset(seed=1)
     parallel_roll(env, 10)
     twins = copies(env)

@@ -5,13 +5,13 @@ id and its pages are what ``docs/gallery.py`` makes of the code, README fits a s
 from __future__ import annotations
 
 import importlib.util
-import os
 import re
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from checkout import checkout_env
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -35,11 +35,9 @@ PRINTED = {
 }
 
 
-def checkout_env() -> dict[str, str]:
+def docs_env() -> dict[str, str]:
     """The checkout under test first on the path, figures without a display."""
-    env = dict(os.environ, MPLBACKEND="Agg")
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
-    return env
+    return checkout_env(MPLBACKEND="Agg")
 
 
 def test_every_page_with_code_is_collected():
@@ -54,7 +52,7 @@ def test_python_block_runs_as_written(block, request, tmp_path):
     done = subprocess.run(
         [sys.executable, "-c", block],
         cwd=tmp_path,  # a block that writes files writes them here
-        env=checkout_env(),
+        env=docs_env(),
         capture_output=True,
         text=True,
         timeout=600,
@@ -107,7 +105,7 @@ def test_the_site_builds_strictly(tmp_path):
     done = subprocess.run(
         [sys.executable, "-m", "mkdocs", "build", "--strict", "-d", str(tmp_path / "site")],
         cwd=ROOT,
-        env=dict(checkout_env(), NO_MKDOCS_2_WARNING="1"),
+        env=docs_env() | {"NO_MKDOCS_2_WARNING": "1"},
         capture_output=True,
         text=True,
         timeout=600,

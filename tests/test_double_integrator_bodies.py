@@ -9,6 +9,7 @@ import pytest
 from instances import converging_pair
 from test_bodies import all_pairs_actions
 
+import rsvo_env
 from rsvo_env.dynamics import double_integrator_step
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry.obstacles import Obstacles
@@ -181,12 +182,8 @@ def test_a_custom_pair_of_double_integrators_of_their_own_size_and_limit(scale):
     """The simulator path: ``custom`` with ``dynamics="double_integrator",
                                              barrier="braking"``, per-agent radii and
     a_max, a nearly head-on swap behind the filter: both arrive, bodies never touch."""
-    import rsvo_env
-    import wrappers
-
     starts = np.array([[-10.0, 0.0], [10.0, 0.3]]) * scale
-    env = wrappers.RCBFSafetyFilter(
-        rsvo_env.parallel_env(
+    env = rsvo_env.parallel_env(
             "custom",
             starts=starts,
             goals=starts[::-1] * [1, 1],
@@ -201,7 +198,6 @@ def test_a_custom_pair_of_double_integrators_of_their_own_size_and_limit(scale):
             max_steps=3000,
             theta=[1.0, 5.0],
         )  # fmt: skip
-    )
     env.reset(seed=0)
     touched = 0
     while env.agents:
@@ -216,7 +212,6 @@ def test_a_custom_pair_of_double_integrators_of_their_own_size_and_limit(scale):
 
 
 def test_custom_dynamics_is_checked():
-    import rsvo_env
 
     kw = {"starts": [[0.0, 0.0], [5.0, 0.0]], "goals": [[5.0, 5.0], [0.0, 5.0]]}
     with pytest.raises(ValueError, match="custom.dynamics = 'hovercraft'"):

@@ -7,7 +7,7 @@ from pettingzoo.test import api_test, parallel_api_test, render_test
 from pettingzoo.utils.conversions import parallel_to_aec
 
 import rsvo_env
-import wrappers
+from rsvo_env import wrappers
 
 SMALL = {
     "position_swap": {"safety_radius": 0.5, "u_max": 1.0, "max_steps": 300},

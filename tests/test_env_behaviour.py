@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import rsvo_env
-import wrappers
+from rsvo_env import wrappers
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -60,7 +60,7 @@ def test_full_episode_determinism(name, filtered):
 
 def test_nominal_episode_is_deterministic_to_the_end():
     def episode():
-        env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("crowd", num_agents=8))
+        env = rsvo_env.parallel_env("crowd", num_agents=8)
         env.reset(seed=11)
         trace = []
         while env.agents:
@@ -78,7 +78,7 @@ def test_per_agent_episode_values_are_the_batched_flat_values():
     core's (E,) ``flat()`` arrays, at every step of an episode with collisions and arrivals."""
     from rsvo_env.sim.metrics import FLAT_FIELDS
 
-    env = rsvo_env.parallel_env("position_swap", theta=(1.0, 1.0))
+    env = rsvo_env.parallel_env("position_swap", theta=(1.0, 1.0), safety_filter=False)
     env.reset(seed=0)
     while env.agents:
         infos = env.step(env.unwrapped.nominal_actions())[4]
@@ -111,7 +111,7 @@ def test_no_global_random_state_is_touched():
     random.seed(123)
     np_state = np.random.get_state()[1].copy()  # noqa: NPY002
     py_state = random.getstate()
-    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("crowd", num_agents=6))
+    env = rsvo_env.parallel_env("crowd", num_agents=6)
     env.reset(seed=0)
     env.reset()
     for _ in range(20):
@@ -143,7 +143,7 @@ def test_package_source_never_uses_global_rng():
 
 def test_circular_swap_without_filter_collides():
     # the paper's move-to-goal (R-ORCA, the default, avoids by itself)
-    env = rsvo_env.parallel_env("circular_swap", nominal="move_to_goal")
+    env = rsvo_env.parallel_env("circular_swap", nominal="move_to_goal", safety_filter=False)
     env.reset(seed=0)
     costs, dists = [], []
     while env.agents:
@@ -158,7 +158,7 @@ def test_circular_swap_without_filter_collides():
 
 
 def test_circular_swap_with_filter_does_not():
-    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("circular_swap"))
+    env = rsvo_env.parallel_env("circular_swap")
     env.reset(seed=0)
     while env.agents:
         _, _, _, _, infos = env.step(env.unwrapped.nominal_actions())
@@ -175,7 +175,8 @@ def test_circular_swap_with_filter_does_not():
 
 def test_rewards_progress_and_goal_bonus():
     env = rsvo_env.parallel_env(
-        "position_swap", deadlock_resolution="none", start=((-4.0, -4.0), (4.0, -4.0))
+        "position_swap", deadlock_resolution="none", start=((-4.0, -4.0), (4.0, -4.0)),
+        safety_filter=False,
     )
     env.reset(seed=0)
     total = {a: 0.0 for a in env.agents}

@@ -13,7 +13,6 @@ from rsvo_env.envs import global_state
 from rsvo_env.envs.registration import IDS
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.responsibility.svo import responsibility_weight
-from wrappers.safety_filter import filtered_aec_env, filtered_parallel_env
 
 
 @pytest.mark.parametrize("scenario", list(IDS.values()))
@@ -22,11 +21,11 @@ def test_pettingzoo_state_test_parallel_and_aec(scenario):
     with warnings.catch_warnings():
         warnings.simplefilter("error", UserWarning)
         state_test(
-            filtered_aec_env(scenario=scenario),
-            filtered_parallel_env(scenario=scenario),
+            rsvo_env.env(scenario),
+            rsvo_env.parallel_env(scenario),
             num_cycles=100,
         )
-    checked(parallel_api_test, filtered_parallel_env(scenario=scenario), num_cycles=50)
+    checked(parallel_api_test, rsvo_env.parallel_env(scenario), num_cycles=50)
 
 
 def unpack(sim, state):
@@ -41,7 +40,7 @@ def unpack(sim, state):
     [("crowd", {"num_agents": 9}), ("circular_swap", {}), ("obstacle_field", {})],
 )
 def test_observations_rebuilt_from_the_state(scenario, kwargs):
-    env = filtered_parallel_env(scenario=scenario, **kwargs)
+    env = rsvo_env.parallel_env(scenario, **kwargs)
     obs, _ = env.reset(seed=3)
     sim = env.unwrapped.sim
     rng = np.random.default_rng(0)
@@ -103,7 +102,7 @@ def test_unicycle_state_has_headings_in_range():
 def test_batched_state_equals_single_envs():
     batched = BatchedEnv("crowd", num_envs=3, num_agents=6)
     batched.reset(seed=10)
-    singles = [filtered_parallel_env(scenario="crowd", num_agents=6) for _ in range(3)]
+    singles = [rsvo_env.parallel_env("crowd", num_agents=6) for _ in range(3)]
     for e, env in enumerate(singles):
         env.reset(seed=10 + e)
     rng = np.random.default_rng(1)

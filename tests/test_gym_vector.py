@@ -1,5 +1,5 @@
-"""BatchedEnv as a Gymnasium VectorEnv (``wrappers.GymnasiumVectorEnv``): Gymnasium's own vector
-wrappers on it unchanged, and a CleanRL-style PPO loop training through them."""
+"""BatchedEnv as a Gymnasium VectorEnv (``rsvo_env.wrappers.GymnasiumVectorEnv``): Gymnasium's
+own vector wrappers on it unchanged, and a CleanRL-style PPO loop training through them."""
 
 import numpy as np
 import pytest
@@ -9,7 +9,7 @@ from gymnasium.wrappers.vector import ClipAction, NormalizeObservation, RecordEp
 
 from rsvo_env.envs import registration
 from rsvo_env.envs.vector import BatchedEnv
-from wrappers import GymnasiumVectorEnv
+from rsvo_env.wrappers import GymnasiumVectorEnv
 
 SMALL = {"num_agents": 4, "max_steps": 25}
 

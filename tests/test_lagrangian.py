@@ -4,16 +4,16 @@ SB3's own, and the baseline's command end to end (the issue's acceptance command
 from __future__ import annotations
 
 import csv
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from checkout import run_python
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from training.lagrangian import Lagrange, gae
+from rsvo_env.training.lagrangian import Lagrange, gae
 
 ROOT = Path(__file__).resolve().parents[1]
 # episode costs are means of step counts: tenths, so that a step of lr (cost - limit) registers
@@ -78,14 +78,14 @@ def test_the_cost_advantage_is_sb3s_gae(T, S, seed, gamma, lam):
 
 def _train(out: Path, *sets: str) -> list[dict[str, str]]:
     """A short PPO-Lagrangian run without the filter (the checkout under test)."""
-    args = [sys.executable, "-m", "training.train", "--scenario", "circular_swap", "--set",
+    args = [sys.executable, "-m", "rsvo_env.training.train", "--scenario", "circular_swap", "--set",
             "algo=ppo_lagrangian", "--set", "env.safety_filter=false", "--set", "ppo.n_steps=8",
             "--set", "ppo.batch_size=384", "--set", "validation.episodes=4",
             "--set", "validation.every=24576", "--timesteps", "24576", "--no-progress",
             "--out", str(out)]  # fmt: skip
     for s in sets:
         args += ["--set", s]
-    done = subprocess.run(args, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    done = run_python(*args[1:], timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
     with open(out / "lagrangian.csv") as f:
         return list(csv.DictReader(f))
@@ -124,10 +124,9 @@ def test_a_lagrangian_model_loads_for_evaluation(tmp_path):
     """The saved model (its cost critic in the policy) loads and evaluates as any SB3 model."""
     out = tmp_path / "run"
     _train(out)
-    done = subprocess.run(
-        [sys.executable, "-m", "training.evaluate", str(out / "model.zip"), "--episodes", "3"],
-        cwd=ROOT, capture_output=True, text=True, timeout=600,
-    )  # fmt: skip
+    done = run_python(
+        "-m", "rsvo_env.training.evaluate", str(out / "model.zip"), "--episodes", "3", timeout=600
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     assert "success" in done.stdout
 

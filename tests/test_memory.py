@@ -3,7 +3,6 @@
 import numpy as np
 
 import rsvo_env
-import wrappers
 
 
 def run(env, steps):
@@ -14,13 +13,13 @@ def run(env, steps):
 
 
 def test_the_parallel_env_keeps_no_per_step_series_by_default():
-    metrics = run(wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("circular_swap")), 200)
+    metrics = run(rsvo_env.parallel_env("circular_swap"), 200)
     assert metrics.min_distance_series == [] and metrics.avg_min_distance_series == []
     assert "avg_min_distance_series" not in metrics.summary(0)
 
 
 def test_record_series_keeps_one_entry_a_step():
-    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("circular_swap", record_series=True))
+    env = rsvo_env.parallel_env("circular_swap", record_series=True)
     metrics = run(env, 200)
     assert len(metrics.min_distance_series) == 200
     series = metrics.summary(0)["avg_min_distance_series"]

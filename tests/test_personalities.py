@@ -1,10 +1,10 @@
-"""The fixed-assignment measure behind the personality search (training.personalities): one
+"""The fixed-assignment measure behind the personality search (rsvo_env.training.personalities): one
 batch of assignments x seeds equals the episodes run one at a time."""
 
 import numpy as np
 
 from rsvo_env.cli.episode import run
-from training.personalities import PAPER_GAME, alternating, evaluate, objective
+from rsvo_env.training.personalities import PAPER_GAME, alternating, evaluate, objective
 
 
 def test_the_batch_equals_single_runs_of_the_paper_game():

@@ -18,15 +18,14 @@ CHECKS = """
 import warnings
 warnings.simplefilter("ignore")
 import pettingzoo, gymnasium
-import rsvo_env, wrappers
+import rsvo_env
 from rsvo_env.envs.registration import HAS_REGISTRY
 from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test, state_test
-from wrappers.safety_filter import filtered_aec_env, filtered_parallel_env
 assert pettingzoo.__version__ == "{version}", pettingzoo.__version__
-parallel_api_test(filtered_parallel_env(scenario="crowd", num_agents=5), num_cycles=100)
-api_test(filtered_aec_env(scenario="circular_swap", num_agents=4), num_cycles=100)
-parallel_seed_test(lambda: filtered_parallel_env(scenario="crowd", num_agents=5))
-state_test(filtered_aec_env(scenario="crowd"), filtered_parallel_env(scenario="crowd"), 50)
+parallel_api_test(rsvo_env.parallel_env("crowd", num_agents=5), num_cycles=100)
+api_test(rsvo_env.env("circular_swap", num_agents=4), num_cycles=100)
+parallel_seed_test(lambda: rsvo_env.parallel_env("crowd", num_agents=5))
+state_test(rsvo_env.env("crowd"), rsvo_env.parallel_env("crowd"), 50)
 gymnasium.make("rsvo/Crowd-v0").reset(seed=0)  # gymnasium's ids whatever PettingZoo's version
 print("registry", HAS_REGISTRY)
 """

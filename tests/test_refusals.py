@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import rsvo_env
-import wrappers
+from rsvo_env import wrappers
 from rsvo_env.control.residual import Residual
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.filter.safety import FilterConfig
@@ -73,7 +73,7 @@ def test_flags_are_true_or_false(value):
     with pytest.raises(ValueError, match="right_hand"):
         BatchedEnv("crowd", num_agents=3, action="residual", residual_right_hand=value)
     with pytest.raises(ValueError, match="safety_filter"):
-        wrappers.filtered_parallel_env("crowd", safety_filter=value)
+        rsvo_env.parallel_env("crowd", safety_filter=value)
     with pytest.raises(ValueError, match="record_series"):
         rsvo_env.parallel_env("crowd", record_series=value)
 
@@ -153,17 +153,15 @@ def test_gamma_and_the_filter_keywords_are_reported_as_used_through_every_adapte
     import gymnasium
     import pettingzoo
 
-    from training import config as configs
+    from rsvo_env.training import config as configs
 
     def used(sim):
         (flt,) = sim.filters
         return flt.config
 
     sims = {
-        "parallel_env + RCBFSafetyFilter": wrappers.RCBFSafetyFilter(
-            rsvo_env.parallel_env("crowd", gamma=5.0)
-        ).unwrapped.sim,
-        "filtered_parallel_env": wrappers.filtered_parallel_env("crowd", gamma=5.0).unwrapped.sim,
+        "parallel_env + RCBFSafetyFilter": rsvo_env.parallel_env("crowd", gamma=5.0).unwrapped.sim,
+        "filtered_parallel_env": rsvo_env.parallel_env("crowd", gamma=5.0).unwrapped.sim,
         "BatchedEnv": BatchedEnv("crowd", gamma=5.0).sim,
         "gymnasium.make": gymnasium.make(
             "rsvo/Crowd-v0", gamma=5.0
@@ -171,7 +169,7 @@ def test_gamma_and_the_filter_keywords_are_reported_as_used_through_every_adapte
         "pettingzoo.make": pettingzoo.make("parallel", "rsvo/Crowd-v0", gamma=5.0).unwrapped.sim,
         "SB3VecEnv": wrappers.SB3VecEnv(BatchedEnv("crowd", gamma=5.0)).venv.sim,
         "ResidualAction": wrappers.ResidualAction(
-            wrappers.filtered_parallel_env("crowd", gamma=5.0)
+            rsvo_env.parallel_env("crowd", gamma=5.0)
         ).unwrapped.sim,
         "training config": configs.make_env(
             configs.resolve({**configs.load("crowd"), "env": {"num_agents": 4, "gamma": 5.0}}), 1
@@ -191,7 +189,7 @@ def test_gamma_and_the_filter_keywords_are_reported_as_used_through_every_adapte
     env.step(env.action_space.sample())
     assert used(env.unwrapped.parallel.unwrapped.sim).neighbor_radius == 50.0
     with pytest.raises(TypeError, match="need safety_filter=True"):
-        wrappers.filtered_parallel_env("crowd", safety_filter=False, neighbor_radius=5.0)
+        rsvo_env.parallel_env("crowd", safety_filter=False, neighbor_radius=5.0)
 
 
 @pytest.mark.parametrize("dt", [1e-18, 1e-300, 5e-324])

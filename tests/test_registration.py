@@ -13,7 +13,6 @@ from pettingzoo.test import api_test, parallel_api_test
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import rsvo_env  # noqa: F401  (registers the ids)
-import wrappers
 from rsvo_env.envs.registration import IDS
 
 
@@ -30,17 +29,17 @@ def test_gymnasium_and_sb3_checkers(env_id):
 @pytest.mark.parametrize("env_id", list(IDS))
 def test_pettingzoo_registry(env_id):
     env = pettingzoo.make("parallel", env_id)
-    assert isinstance(env, wrappers.RCBFSafetyFilter)
+    assert isinstance(env, rsvo_env.RSVOParallelEnv) and len(env.sim.filters) == 1
     checked(parallel_api_test, env, num_cycles=300)
     checked(api_test, pettingzoo.make("aec", env_id), num_cycles=300)
     bare = pettingzoo.make("parallel", env_id, safety_filter=False)
-    assert isinstance(bare, rsvo_env.RSVOParallelEnv)
+    assert isinstance(bare, rsvo_env.RSVOParallelEnv) and bare.sim.filters == []
 
 
 def test_kwargs_pass_through_and_unknown_ones_raise():
     env = gymnasium.make("rsvo/Crowd-v0", num_agents=4, gamma=5.0)
     assert env.action_space.shape == (8,)
-    assert env.unwrapped.parallel.config.gamma == 5.0
+    assert env.unwrapped.parallel.sim.filters[0].config.gamma == 5.0
     p = pettingzoo.make("parallel", "rsvo/CircularSwap-v0", num_agents=8)
     assert len(p.possible_agents) == 8
     with pytest.raises(TypeError, match=r"\['warp'\]"):

@@ -4,8 +4,9 @@ the licence and the type marker shipped."""
 import importlib.metadata
 import re
 import subprocess
-import sys
 from pathlib import Path
+
+from checkout import run_python
 
 import rsvo_env
 
@@ -16,8 +17,7 @@ def test_one_version_everywhere_written_once():
     version = rsvo_env.__version__
     assert re.fullmatch(r"\d+\.\d+\.\d+", version)
     assert importlib.metadata.version("rsvo-env") == version
-    out = subprocess.run([sys.executable, "-m", "rsvo_env.cli", "--version"], cwd=ROOT,
-                         capture_output=True, text=True)  # fmt: skip
+    out = run_python("-m", "rsvo_env.cli", "--version")
     assert out.returncode == 0 and out.stdout.strip() == f"rsvo {version}"
     tracked = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True)
     written = [
@@ -34,4 +34,4 @@ def test_the_licence_and_the_type_marker_are_declared():
     assert "Typing :: Typed" in (meta.get_all("Classifier") or [])
     assert (ROOT / "rsvo_env" / "py.typed").exists()
     pyproject = (ROOT / "pyproject.toml").read_text()
-    assert 'rsvo_env = ["py.typed"]' in pyproject
+    assert '"rsvo_env" = ["py.typed"]' in pyproject

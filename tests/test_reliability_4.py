@@ -50,7 +50,7 @@ def test_4_nominal_actions_keep_theta_exactly():
 
 def test_5_sb3_refuses_a_next_step_batched_env_at_construction():
     """It was accepted, then raised KeyError '_final_obs' when the first episode ended."""
-    from wrappers import SB3VecEnv
+    from rsvo_env.wrappers import SB3VecEnv
 
     env = BatchedEnv("crowd", num_envs=2, num_agents=3, autoreset_mode="next_step")
     with pytest.raises(ValueError, match="autoreset_mode = 'next_step'"):
@@ -71,7 +71,7 @@ def test_12_the_vector_env_declares_the_mode_its_batched_env_has_and_the_docs_sa
     from gymnasium.vector import AutoresetMode
     from gymnasium.wrappers.vector import NormalizeObservation
 
-    from wrappers import GymnasiumVectorEnv
+    from rsvo_env.wrappers import GymnasiumVectorEnv
 
     given = GymnasiumVectorEnv(BatchedEnv("crowd", num_envs=2, num_agents=3))
     assert given.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
@@ -124,7 +124,7 @@ def test_7_readme_names_every_registered_step_limit():
 def test_8_values_sb3_would_fail_on_are_refused_before_any_work(tmp_path, capsys, setting,
                                                                  words):  # fmt: skip
     """They exited 1 with SB3's 15-line traceback, after config.yaml was written to --out."""
-    from training import train
+    from rsvo_env.training import train
 
     out = tmp_path / "run"
     code = exit_code(lambda: train.main(["--set", setting, "--out", str(out)]))
@@ -147,7 +147,7 @@ def test_9_runner_counts_are_checked_and_refused_with_the_sb3_engine(tmp_path, c
                                                                      words):  # fmt: skip
     """``--num-env-runners -1 --num-envs-per-env-runner 0`` with the SB3 engine exited 0 and
     wrote a whole run: they were checked for RLlib only, and ignored otherwise."""
-    from training import train
+    from rsvo_env.training import train
 
     out = tmp_path / "run"
     code = exit_code(lambda: train.main([*flags, "--out", str(out)]))
@@ -213,7 +213,7 @@ def test_11_an_id_names_its_scenario():
 def test_14_yaml_numbers_as_a_user_writes_them(tmp_path):
     """``--set env.gamma=1e9`` was refused as the string '1e9' (YAML 1.1 needs ``1.0e9``); the
     same in config files."""
-    from training import config as configs
+    from rsvo_env.training import config as configs
 
     cfg = configs.load("crowd", None)
     configs.set_value(cfg, "env.gamma=1e1")

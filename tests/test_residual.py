@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import rsvo_env
-import wrappers
+from rsvo_env import wrappers
 from rsvo_env.control.residual import Residual
 from rsvo_env.envs.vector import BatchedEnv
 
@@ -17,7 +17,7 @@ def test_a_zero_residual_is_the_scripted_controller(nominal):
     float32 precision of ``nominal_actions()`` (R-ORCA feeds the velocity back, so that
     rounding grows along an episode: its comparison is the exact one)."""
     def make():
-        return wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("circular_swap", nominal=nominal))
+        return rsvo_env.parallel_env("circular_swap", nominal=nominal)
 
     scripted, residual = make(), wrappers.ResidualAction(make())
     theta = {"theta": [2, 1, 2, 1, 2, 1]}
@@ -77,7 +77,7 @@ def test_batched_residuals_equal_the_wrapper(name, yield_radius, interaction_rad
     kw = {"max_steps": 60, "nominal": "move_to_goal"}
     venv = BatchedEnv(name, num_envs=E, action="residual", gate_radius=0.5, **kw, **radii)
     singles = [
-        wrappers.ResidualAction(wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, **kw)),
+        wrappers.ResidualAction(rsvo_env.parallel_env(name, **kw),
                                 **radii)  # fmt: skip
         for _ in range(E)
     ]
@@ -278,21 +278,22 @@ def test_a_stalled_agent_follows_the_script_with_a_stall_gate(stall_gate):
 
 
 def test_the_residual_settings_have_one_owner():
-    """Residual owns every default; BatchedEnv and ResidualAction take its values under their
-    spellings, and a training config's keywords map onto it (Residual.ENV_KEYWORDS)."""
+    """Residual owns every default; BatchedEnv, ResidualAction and a training config take its
+    values under one spelling (Residual.ENV_KEYWORDS)."""
     import dataclasses
     import inspect
 
+    from rsvo_env import BatchedEnv
     from rsvo_env.control.residual import ENV_KEYWORDS, Residual
-    from rsvo_env.vector import BatchedEnv
-    from training.config import residual_settings
+    from rsvo_env.training.config import residual_settings
 
     defaults = {f.name: f.default for f in dataclasses.fields(Residual)}
     batched = inspect.signature(BatchedEnv).parameters
     wrapper = inspect.signature(wrappers.ResidualAction).parameters
+    assert set(wrapper) - {"env"} == set(ENV_KEYWORDS)
     for keyword, name in ENV_KEYWORDS.items():
         assert batched[keyword].default == defaults[name], keyword
-        assert wrapper[name].default == defaults[name], name
+        assert wrapper[keyword].default == defaults[name], keyword
     assert residual_settings({}) == Residual()
     given = {"gate_radius": 0.25, "residual_scale": 2.0, "yield_radius": 1.25, "k": 3}
     assert residual_settings(given) == Residual(0.25, scale=2.0, yield_radius=1.25)

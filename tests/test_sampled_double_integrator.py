@@ -9,7 +9,6 @@ from hypothesis import strategies as st
 from instances import converging_pair
 
 import rsvo_env
-import wrappers
 from rsvo_env.dynamics import double_integrator_step
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
@@ -93,9 +92,7 @@ def random_merge(rng):
         dt, params = draw_merge(rng)
         # the braking barrier's sampled-data row under test (the scenario's default is the
         # stopping-segment barrier)
-        env = wrappers.RCBFSafetyFilter(
-            rsvo_env.parallel_env("ramp_merge", **params), barrier="braking"
-        )
+        env = rsvo_env.parallel_env("ramp_merge", **params, barrier="braking")
         env.reset(seed=0)
         if merge_h(env.unwrapped.world, params["safety_radius"], params["a_max"]) >= 0:
             return env, params

@@ -5,7 +5,8 @@ import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import VecCheckNan
 
-import wrappers
+import rsvo_env
+from rsvo_env import wrappers
 from rsvo_env.envs.vector import BatchedEnv
 
 
@@ -93,7 +94,7 @@ def test_single_parallel_env_path_equals_the_batched_one():
     end-of-episode infos as over a BatchedEnv of one env, through an auto-reset."""
     kwargs = {"num_agents": 4, "max_steps": 12}
     single = wrappers.SB3VecEnv(
-        wrappers.ResidualAction(wrappers.filtered_parallel_env("crowd", **kwargs))
+        wrappers.ResidualAction(rsvo_env.parallel_env("crowd", **kwargs))
     )
     batched = wrappers.SB3VecEnv(BatchedEnv("crowd", num_envs=1, action="residual", **kwargs))
     assert single.num_envs == batched.num_envs == 4

@@ -2,16 +2,14 @@
 arrays (validated), the doorway and the obstacle field; PettingZoo's seed test; safety of whole
 episodes behind the filter, collisions counted on the bodies' true sizes without it."""
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from checkout import run_python
 from pettingzoo.test import parallel_seed_test
 
 import rsvo_env
-import wrappers
 from rsvo_env.scenarios import make_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -35,7 +33,7 @@ def custom(**kw):
     [("doorway", {"num_agents": 4}), ("obstacle_field", {"num_agents": 4}), ("custom", custom())],
 )
 def test_pettingzoo_seed_test(name, kwargs):
-    parallel_seed_test(lambda: wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, **kwargs)))
+    parallel_seed_test(lambda: rsvo_env.parallel_env(name, **kwargs))
 
 
 def test_obstacles_are_drawn_from_the_episode_seed():
@@ -55,7 +53,7 @@ def test_obstacles_are_drawn_from_the_episode_seed():
      ("obstacle_field", {"num_agents": 16, "side": 24.0, "num_circles": 12})],
 )  # fmt: skip
 def test_scripted_episodes_behind_the_filter_never_touch(name, kwargs):
-    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, **kwargs))
+    env = rsvo_env.parallel_env(name, **kwargs)
     for seed in range(3):
         env.reset(seed=seed, options={"theta": np.linspace(0.5, 8.0, env.unwrapped.sim.n)})
         sim = env.unwrapped.sim
@@ -72,7 +70,7 @@ def test_without_the_filter_a_body_in_a_wall_is_a_collision():
     (radius 0.3) overlaps it, although its centre is 1.3 m from the circle's."""
     sc = custom(starts=[(-4.0, 0.0), (6.0, 6.0)], goals=[(4.0, 0.0), (6.0, -6.0)],
                 radii=[0.3, 0.3], walls=None)  # fmt: skip
-    env = rsvo_env.parallel_env("custom", **sc)
+    env = rsvo_env.parallel_env("custom", safety_filter=False, **sc)
     env.reset(seed=0)
     hit = False
     while env.agents and not hit:
@@ -154,7 +152,7 @@ def test_plain_scenes_keep_their_observation_layout():
 
 def test_each_agent_keeps_its_own_speed_limit():
     limits = [0.5, 3.0, 1.0, 2.0]
-    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("custom", **custom(u_max=limits)))
+    env = rsvo_env.parallel_env("custom", **custom(u_max=limits))
     env.reset(seed=0)
     lim = np.array(limits)
     fastest = np.zeros(4)
@@ -221,7 +219,7 @@ def test_a_sparse_crowd_is_laid_out_in_memory_by_agents_not_by_area():
         "rsvo_env.parallel_env('crowd', num_agents=100, side_factor=700.0).reset(seed=0)\n"
         "print((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024)\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
+    out = run_python("-c", code)
     assert out.returncode == 0, out.stderr[-2000:]
     assert float(out.stdout) < 32.0  # MB
     with pytest.raises(ValueError, match="overlap"):

@@ -9,7 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import rsvo_env
-import wrappers
+from rsvo_env import wrappers
 from rsvo_env.control.theta_action import DEFAULT_RANGE, ThetaAction
 from rsvo_env.envs.vector import BatchedEnv
 from tests.test_batched import check_batch_equals_singles

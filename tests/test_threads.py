@@ -5,12 +5,12 @@ refused by name."""
 
 import os
 import subprocess
-import sys
 from pathlib import Path
 
 import numba
 import numpy as np
 import pytest
+from checkout import checkout_env, run_python
 
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.qp import exact
@@ -59,10 +59,8 @@ def test_the_solver_puts_back_the_callers_numba_thread_count(caller):
 
 
 def run(code: str, value: str) -> subprocess.CompletedProcess:
-    env = {**os.environ, threads.ENV_VAR: value, "NUMBA_NUM_THREADS": "2"}
-    return subprocess.run(
-        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True
-    )
+    env = checkout_env(**{threads.ENV_VAR: value, "NUMBA_NUM_THREADS": "2"})
+    return run_python("-c", code, env=env)
 
 
 def test_the_environment_variable_opts_a_process_in():

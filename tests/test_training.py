@@ -1,4 +1,5 @@
-"""training.train and training.evaluate through their real entry points, and their configs."""
+"""rsvo_env.training.train and rsvo_env.training.evaluate through their real entry points, and
+their configs."""
 
 import csv
 import json
@@ -8,11 +9,12 @@ import numpy as np
 import pytest
 import yaml
 
+from rsvo_env.cli.main import main as rsvo
 from rsvo_env.sim import observation
-from training import config as configs
-from training import evaluate, train
-from training.evaluation import record_gif, run_episodes, scripted_policy
-from wrappers.sb3 import SB3VecEnv
+from rsvo_env.training import config as configs
+from rsvo_env.training import evaluate, train
+from rsvo_env.training.evaluation import record_gif, run_episodes, scripted_policy
+from rsvo_env.wrappers.sb3 import SB3VecEnv
 
 SMALL = [
     "--scenario", "circular_swap", "--set", "env.num_agents=4", "--num-envs", "2",
@@ -23,8 +25,9 @@ SMALL = [
 
 
 def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys):
+    """Through the command line's ``rsvo train`` and ``rsvo evaluate``."""
     run = tmp_path / "run"
-    assert train.main([*SMALL, "--timesteps", "3000", "--seed", "1", "--out", str(run)]) == 0
+    assert rsvo(["train", *SMALL, "--timesteps", "3000", "--seed", "1", "--out", str(run)]) == 0
     for name in ("config.yaml", "model.zip", "best_model.zip", "progress.csv", "summary.json"):
         assert (run / name).is_file(), name
     assert list((run / "checkpoints").glob("model_*_steps.zip"))
@@ -59,7 +62,7 @@ def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys
 
     gif = tmp_path / "episode.gif"
     args = [str(run / "model.zip"), "--episodes", "6", "--seed", "5", "--compare-scripted"]
-    assert evaluate.main([*args, "--gif", str(gif)]) == 0
+    assert rsvo(["evaluate", *args, "--gif", str(gif)]) == 0
     report = json.loads((run / "evaluation.json").read_text())
     assert report["policy"]["episodes"] == 6 and report["policy"]["collisions"] == 0
     # an episode succeeds when every agent arrives: the share arrived is at least the success
@@ -73,12 +76,13 @@ def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys
     # the same policy in a larger crowd than it was trained in (its observation is local)
     bigger = tmp_path / "bigger.json"
     args = [str(run / "model.zip"), "--episodes", "2", "--set", "env.num_agents=9"]
-    assert evaluate.main([*args, "--out", str(bigger)]) == 0
+    assert rsvo(["evaluate", *args, "--out", str(bigger)]) == 0
     report = json.loads(bigger.read_text())
     assert report["num_agents"] == 9 and report["policy"]["collisions"] == 0
     with pytest.raises(SystemExit) as exit_:
-        evaluate.main([str(run / "model.zip"), "--set", "env.num_agents=abc"])
-    assert exit_.value.code == 2 and "abc" in capsys.readouterr().err
+        rsvo(["evaluate", str(run / "model.zip"), "--set", "env.num_agents=abc"])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and err.startswith("rsvo evaluate: error:") and "abc" in err
 
 
 def test_time_limit_stops_training_and_saves(tmp_path, capsys):
@@ -98,7 +102,7 @@ def test_time_limit_stops_training_and_saves(tmp_path, capsys):
 
 
 def test_progress_share_is_the_nearer_end_of_the_budget():
-    from training.callbacks import Progress
+    from rsvo_env.training.callbacks import Progress
 
     bar = Progress(1000, seconds=10.0)
     assert bar.fraction(100, 1.0) == 0.1

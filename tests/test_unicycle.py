@@ -5,6 +5,7 @@ motion under the look-ahead hold, and obstacles hold as for the single integrato
 import numpy as np
 import pytest
 
+import rsvo_env
 from rsvo_env.dynamics import barriers, unicycle_step
 from rsvo_env.dynamics.unicycle import heading_vectors, rotate_rows
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
@@ -262,12 +263,10 @@ def test_holonomic_is_checked():
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_simulated_unicycle_crowd_behind_the_filter_never_touches(seed):
-    import rsvo_env
-    import wrappers
     from rsvo_env.dynamics.unicycle import heading_vectors as e
 
-    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("unicycle_crowd", num_agents=12,
-                                                          dt=0.05, max_steps=600))  # fmt: skip
+    env = rsvo_env.parallel_env("unicycle_crowd", num_agents=12,
+                                                          dt=0.05, max_steps=600)  # fmt: skip
     env.reset(seed=seed, options={"theta": np.linspace(0.5, 8.0, 12)})
     sim = env.unwrapped.sim
     p = sim.scenario.params

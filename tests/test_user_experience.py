@@ -97,9 +97,7 @@ def test_registered_specs_carry_the_step_limit():
 
 
 def test_repr_names_scenario_and_filter():
-    import wrappers
-
-    env = wrappers.RCBFSafetyFilter(rsvo_env.parallel_env("circular_swap"), gamma=10.0)
+    env = rsvo_env.parallel_env("circular_swap", gamma=10.0)
     want = "RSVOParallelEnv('circular_swap', num_agents=6, filter=[gamma=10 exact])"
     assert repr(env.unwrapped) == want
     assert str(env) == "rsvo_circular_swap_v0"  # print(env) names the scenario

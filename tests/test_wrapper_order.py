@@ -7,7 +7,7 @@ import pytest
 from pettingzoo.utils import BaseParallelWrapper
 
 import rsvo_env
-import wrappers
+from rsvo_env import wrappers
 
 
 class Recorder(BaseParallelWrapper):
@@ -47,7 +47,8 @@ class ActionNoise(BaseParallelWrapper):
 
 
 def stack(kind, seed):
-    rec = Recorder(rsvo_env.parallel_env("crowd", num_agents=12, max_steps=150))
+    bare = rsvo_env.parallel_env("crowd", num_agents=12, max_steps=150, safety_filter=False)
+    rec = Recorder(bare)
     if kind == "repeat_inside":
         return wrappers.RCBFSafetyFilter(ActionRepeat(rec)), rec
     if kind == "noise_inside":
@@ -89,7 +90,7 @@ def test_safe_and_truthful_in_any_order(kind):
 def test_stacked_filters_report_what_is_applied():
     """Two filters with different gains: the reported u_safe is the control integrated (the
     old side channel reported the outer filter's [-3, 0] while [-1.26, 0] was applied)."""
-    rec = Recorder(rsvo_env.parallel_env("position_swap", max_steps=400))
+    rec = Recorder(rsvo_env.parallel_env("position_swap", max_steps=400, safety_filter=False))
     env = wrappers.RCBFSafetyFilter(wrappers.RCBFSafetyFilter(rec, gamma=1.0), gamma=5.0)
     env.reset(seed=0, options={"theta": [1.0, 1.0]})
     while env.agents:
@@ -103,7 +104,7 @@ def test_stacked_filters_report_what_is_applied():
 
 def test_unwrapped_filter_stage_cannot_be_bypassed_by_inner_wrappers():
     """Without the filter, the same action-repeat stack collides (the test can fail)."""
-    rec = Recorder(rsvo_env.parallel_env("position_swap", max_steps=400))
+    rec = Recorder(rsvo_env.parallel_env("position_swap", max_steps=400, safety_filter=False))
     env = ActionRepeat(rec)
     env.reset(seed=0, options={"theta": [1.0, 1.0]})
     while env.agents:

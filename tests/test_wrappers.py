@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 import rsvo_env
-import wrappers
+from rsvo_env import wrappers
 
 
 def filtered(name, **kwargs):
-    return wrappers.RCBFSafetyFilter(rsvo_env.parallel_env(name, **kwargs))
+    return rsvo_env.parallel_env(name, **kwargs)  # filtered by default
 
 
 def run(env, seed=0, options=None, policy="nominal", rng=None, check=None):
@@ -67,9 +67,8 @@ def test_ramp_merge_stays_safe(policy):
 def test_info_fields_and_intervention_penalty():
     # the paper's move-to-goal, which the filter corrects (R-ORCA rarely needs it to)
     plain = filtered("circular_swap", nominal="move_to_goal")
-    penal = wrappers.RCBFSafetyFilter(
-        rsvo_env.parallel_env("circular_swap", nominal="move_to_goal"), intervention_penalty=0.5
-    )
+    bare = rsvo_env.parallel_env("circular_swap", nominal="move_to_goal", safety_filter=False)
+    penal = wrappers.RCBFSafetyFilter(bare, intervention_penalty=0.5)
     plain.reset(seed=0)
     penal.reset(seed=0)
     for _ in range(150):
@@ -245,8 +244,6 @@ def test_wrappers_configure_the_env_they_wrap_in_place():
     import numpy as np
 
     import rsvo_env
-    import wrappers
-
     def interventions(env):
         env.reset(seed=0)
         total = 0.0
@@ -256,7 +253,7 @@ def test_wrappers_configure_the_env_they_wrap_in_place():
             total += sum(infos[a]["intervention"] for a in env.agents)
         return total
 
-    env = rsvo_env.parallel_env("circular_swap", num_agents=6)
+    env = rsvo_env.parallel_env("circular_swap", num_agents=6, safety_filter=False)
     assert interventions(env) == 0.0  # bare: nothing filters
     wrapped = wrappers.RCBFSafetyFilter(env)
     assert wrapped.unwrapped is env

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from ray.rllib.utils.pre_checks.env import check_multiagent_environments
 
-from training import config as configs
-from training import evaluate, sweep, train
-from training.rllib_env import RSVOMultiAgentEnv
+from rsvo_env.training import config as configs
+from rsvo_env.training import evaluate, sweep, train
+from rsvo_env.training.rllib_env import RSVOMultiAgentEnv
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = [
@@ -151,7 +151,7 @@ def test_bad_engine_options_are_refused(tmp_path, capsys):
 
 
 def test_one_module_is_shared_by_every_agent():
-    from training.rllib_engine import SHARED, build
+    from rsvo_env.training.rllib_engine import SHARED, build
 
     config = build(small_cfg(), 0, 1)
     assert set(config.policies) == {SHARED}
@@ -162,7 +162,7 @@ def test_theta_search_runs_tune_with_optuna_and_never_loses_to_its_starts(tmp_pa
     """Ray Tune + Optuna's TPE over the paper's six-agent game: the starts (the paper's
     alternating assignment, equal scores) are trials, so the best is at least as good as both,
     and the report's measures are those of the batched evaluation."""
-    from training import theta_search
+    from rsvo_env.training import theta_search
 
     out = tmp_path / "search"
     assert theta_search.main(["--trials", "6", "--out", str(out)]) == 0
@@ -175,7 +175,7 @@ def test_theta_search_runs_tune_with_optuna_and_never_loses_to_its_starts(tmp_pa
         assert all(low <= t <= high for t in row["theta"]) and row["collision_steps"] == 0
     # a row's objective is the batched evaluation of its theta
     from rsvo_env.envs.vector import BatchedEnv
-    from training.personalities import PAPER_GAME, evaluate
+    from rsvo_env.training.personalities import PAPER_GAME, evaluate
 
     row = report["rows"][-1]
     stats = evaluate([row["theta"]], [0], **PAPER_GAME)
@@ -184,7 +184,7 @@ def test_theta_search_runs_tune_with_optuna_and_never_loses_to_its_starts(tmp_pa
 
 
 def test_theta_search_refuses_bad_arguments(tmp_path, capsys):
-    from training import theta_search
+    from rsvo_env.training import theta_search
 
     for args, words in (
         (["--low", "5", "--high", "1"], "--low 5.0 exceeds --high 1.0"),

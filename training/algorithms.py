@@ -8,7 +8,7 @@ from typing import Any
 def algorithm_class(algo: str) -> Any:
     """``ppo`` and ``sac``: Stable-Baselines3's; ``ppo_lagrangian``: :class:`PPOLagrangian`."""
     if algo == "ppo_lagrangian":
-        from training.lagrangian import PPOLagrangian
+        from rsvo_env.training.lagrangian import PPOLagrangian
 
         return PPOLagrangian
     from stable_baselines3 import PPO, SAC

@@ -2,7 +2,8 @@
 
 A config is a plain dict (``configs/<scenario>.yaml``); :func:`resolve` merges the overrides and
 checks every field before anything is built, so a bad value fails with its name, not deep inside
-SB3. The resolved config is saved beside the model and is all :mod:`training.evaluate` needs.
+SB3. The resolved config is saved beside the model and is all
+:mod:`rsvo_env.training.evaluate` needs.
 """
 
 from __future__ import annotations
@@ -13,12 +14,12 @@ from typing import Any
 
 import yaml
 
-from rsvo_env.cli.scene_file import load_yaml
 from rsvo_env.control.residual import Residual
 from rsvo_env.envs.factory import FILTER_KEYWORDS
 from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.training import schema
+from rsvo_env.util.scene_file import load_yaml
 from rsvo_env.util.validation import shown, unknown_keywords
-from training import schema
 
 CONFIG_DIR = Path(__file__).parent / "configs"
 
@@ -95,8 +96,8 @@ def set_value(cfg: dict[str, Any], assignment: str) -> None:
 
 def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
     """A checked copy of ``cfg`` with the non-None ``overrides`` (top-level keys) applied:
-    every key and value against :data:`TOP` (:mod:`training.schema`), then the env built once,
-    before anything runs."""
+    every key and value against :data:`TOP` (:mod:`rsvo_env.training.schema`), then the env
+    built once, before anything runs."""
     out = copy.deepcopy(cfg)
     out.update({k: v for k, v in overrides.items() if v is not None})
     out.setdefault("seed", 0)
@@ -141,7 +142,8 @@ def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
 def hyperparameters(cfg: dict[str, Any]) -> dict[str, Any]:
     """The keyword arguments of the SB3 algorithm ``cfg["algo"]``, with a named activation
     (``policy_kwargs.activation_fn: relu``) turned into its torch module class; PPO-Lagrangian's
-    are PPO's and its ``lagrangian`` section (defaults: ``training.lagrangian.PPOLagrangian``)."""
+    are PPO's and its ``lagrangian`` section (defaults:
+    ``rsvo_env.training.lagrangian.PPOLagrangian``)."""
     import torch
 
     hyper = copy.deepcopy(cfg[SECTION[cfg["algo"]]])
@@ -220,21 +222,21 @@ def make_parallel(
     cfg: dict[str, Any], render_mode: str | None = None, action: str | None = None
 ) -> Any:
     """The same env as a filtered PettingZoo ParallelEnv (one env: videos, the single-env path)."""
-    from wrappers import ResidualAction
-    from wrappers.safety_filter import filtered_parallel_env
+    import rsvo_env
+    from rsvo_env.wrappers import ResidualAction
 
-    env = filtered_parallel_env(
+    env = rsvo_env.parallel_env(
         cfg["scenario"], render_mode=render_mode, weighting=cfg["weighting"], **env_keywords(cfg)
     )
     if (action or cfg["action"]) == "residual":
         r = residual_settings(cfg)
         env = ResidualAction(
             env,
-            r.gate_radius,
-            r.right_hand,
-            r.scale,
-            r.yield_radius,
-            r.interaction_radius,
-            r.stall_gate,
+            gate_radius=r.gate_radius,
+            residual_right_hand=r.right_hand,
+            residual_scale=r.scale,
+            yield_radius=r.yield_radius,
+            interaction_radius=r.interaction_radius,
+            stall_gate=r.stall_gate,
         )
     return env

@@ -1,10 +1,10 @@
 """Evaluate a trained model (with the config saved beside it) on seeded episodes, filter on.
 
-    python -m training.evaluate runs/circular/model.zip --episodes 100 --seed 1000 \\
+    python -m rsvo_env.training.evaluate runs/circular/model.zip --episodes 100 --seed 1000 \\
         --compare-scripted --gif runs/circular/episode.gif
-    python -m training.evaluate runs/crowd/best_model.zip --set env.num_agents=100
+    python -m rsvo_env.training.evaluate runs/crowd/best_model.zip --set env.num_agents=100
 
-``--set`` overrides the saved config for the evaluation alone (as ``training.train --set``
+``--set`` overrides the saved config for the evaluation alone (as ``rsvo_env.training.train --set``
 does for training): the observation is local, so a policy trained on 12 agents runs unchanged
 in a crowd of 100 or 1,000.
 
@@ -22,12 +22,10 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from rsvo_env.cli.arguments import HelpFormatter, Parser, count, output_problem
-from rsvo_env.util.validation import shown
-from training import config as configs
-from training.algorithms import algorithm_class
-from training.config import make_env
-from training.evaluation import (
+from rsvo_env.training import config as configs
+from rsvo_env.training.algorithms import algorithm_class
+from rsvo_env.training.config import make_env
+from rsvo_env.training.evaluation import (
     evaluation_cap,
     model_policy,
     paired,
@@ -36,6 +34,8 @@ from training.evaluation import (
     scripted_policy,
     summarize,
 )
+from rsvo_env.util.arguments import HelpFormatter, Parser, count, output_problem
+from rsvo_env.util.validation import shown
 
 
 def load_model(path: str | Path, overrides: Sequence[str] = ()) -> tuple[Any, dict[str, Any]]:
@@ -55,9 +55,9 @@ def load_model(path: str | Path, overrides: Sequence[str] = ()) -> tuple[Any, di
             break
     else:
         raise ValueError(f"no config.yaml beside {shown(str(path))}: was it written by "
-                         f"training.train?")
+                         f"rsvo_env.training.train?")
     if (path / "learner_group").is_dir():
-        from training.rllib_engine import load_module, module_policy
+        from rsvo_env.training.rllib_engine import load_module, module_policy
 
         return module_policy(load_module(path)), cfg
 
@@ -119,9 +119,11 @@ def evaluate_loaded(
     return result
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(
+    argv: list[str] | None = None, prog: str = "python -m rsvo_env.training.evaluate"
+) -> int:
     p = Parser(
-        prog="python -m training.evaluate",
+        prog=prog,
         description=__doc__.split("\n\n")[0],
         formatter_class=HelpFormatter,
     )

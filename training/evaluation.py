@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from training.config import make_env, make_parallel
+from rsvo_env.training.config import make_env, make_parallel
 
 Policy = Callable[[NDArray[np.float32], Any], NDArray]
 # the per-episode records an evaluation returns, one array of length `episodes` each

@@ -1,11 +1,11 @@
 """Training on Ray RLlib (the ``distributed`` extra): the same configs, logs and evaluation as the
 SB3 path, PPO with one RLModule shared by every agent.
 
-``train_rllib`` builds RLlib's PPO from a resolved config (its ``rllib`` section), on a local
-Ray instance or on a running cluster (``address``), with ``num_env_runners`` sampling processes
-of ``num_envs_per_env_runner`` envs each. Every iteration appends to ``progress.csv`` (and
-TensorBoard when installed); validation runs our own protocol (:mod:`training.evaluation`) on
-the shared module; checkpoints are RLlib's (``checkpoint/``, ``best_checkpoint/``,
+``train_rllib`` builds RLlib's PPO from a resolved config (its ``rllib`` section), on a local Ray
+instance or on a running cluster (``address``), with ``num_env_runners`` sampling processes of
+``num_envs_per_env_runner`` envs each. Every iteration appends to ``progress.csv`` (and TensorBoard
+when installed); validation runs our own protocol (:mod:`rsvo_env.training.evaluation`) on the
+shared module; checkpoints are RLlib's (``checkpoint/``, ``best_checkpoint/``,
 ``checkpoints/step_N``), beside the run's ``config.yaml``.
 """
 
@@ -20,8 +20,13 @@ from typing import Any
 
 import numpy as np
 
-from training import config as configs
-from training.evaluation import append_validation, run_episodes, summarize, validation_score
+from rsvo_env.training import config as configs
+from rsvo_env.training.evaluation import (
+    append_validation,
+    run_episodes,
+    summarize,
+    validation_score,
+)
 
 SHARED = "shared"
 
@@ -59,8 +64,8 @@ def build(cfg: dict[str, Any], num_env_runners: int, num_envs_per_env_runner: in
     """RLlib's PPO config for a resolved training config."""
     from ray.rllib.algorithms.ppo import PPOConfig
 
-    from training.rllib_callbacks import EpisodeMetrics
-    from training.rllib_env import RSVOMultiAgentEnv
+    from rsvo_env.training.rllib_callbacks import EpisodeMetrics
+    from rsvo_env.training.rllib_env import RSVOMultiAgentEnv
 
     r = cfg["rllib"]
     one_thread = {

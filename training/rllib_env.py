@@ -4,7 +4,8 @@ Built from a training config (the same YAML as the SB3 path: scenario, filter, r
 actions, weighting). It adapts our PettingZoo ParallelEnv directly (no SuperSuit, no RLlib
 PettingZoo wrapper): agents, spaces, the global state (``state()``, ``state_space``), and
 per-agent infos with the filter's signals and the
-running episode's ``episode_*`` values, which :mod:`training.rllib_engine` turns into metrics.
+running episode's ``episode_*`` values, which :mod:`rsvo_env.training.rllib_engine` turns into
+metrics.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import Any
 import gymnasium
 from ray.rllib.env.multi_agent_env import MultiAgentEnv
 
-from training.config import make_parallel
+from rsvo_env.training.config import make_parallel
 
 
 class RSVOMultiAgentEnv(MultiAgentEnv):

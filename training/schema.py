@@ -171,7 +171,7 @@ def _signature_fields(cls: type, skip: set[str]) -> dict[str, Check]:
 def sb3_section(algo: str) -> Check:
     """The section of SB3 algorithm ``algo`` (``ppo``, ``sac``): its constructor's keywords,
     typed by their defaults, and ``policy_kwargs`` checked against its MlpPolicy's."""
-    from training.algorithms import algorithm_class
+    from rsvo_env.training.algorithms import algorithm_class
 
     cls = algorithm_class(algo)
     fields = _signature_fields(cls, _SET_BY_TRAINER)

@@ -1,6 +1,6 @@
 """A parameter sweep on Ray Tune: weighting mode x theta assignment x seed, one table.
 
-    python -m training.sweep --engine rllib --scenario circular_swap \\
+    python -m rsvo_env.training.sweep --engine rllib --scenario circular_swap \\
         --weightings asymmetric symmetric --thetas random paper --seeds 0 1 2 \\
         --timesteps 200000 --episodes 100 --out runs/sweep [--address HOST:PORT]
 
@@ -21,10 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from rsvo_env.cli.arguments import HelpFormatter, Parser, count
+from rsvo_env.training import config as configs
+from rsvo_env.training import tune_runs
+from rsvo_env.util.arguments import HelpFormatter, Parser, count
 from rsvo_env.util.validation import shown
-from training import config as configs
-from training import tune_runs
 
 THETAS = ("random", "paper", "equal")
 
@@ -42,8 +42,8 @@ def trial(params: dict[str, Any]) -> None:
     """One Tune trial: train, then evaluate on the held-out seeds; reports as it goes."""
     from ray import tune
 
-    from training.evaluation import run_episodes, summarize
-    from training.rllib_engine import SHARED, agent_steps, build, module_policy
+    from rsvo_env.training.evaluation import run_episodes, summarize
+    from rsvo_env.training.rllib_engine import SHARED, agent_steps, build, module_policy
 
     cfg = params["cfg"]
     algo = build(cfg, 0, 1).build_algo()
@@ -60,7 +60,7 @@ def trial(params: dict[str, Any]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     p = Parser(
-        prog="python -m training.sweep",
+        prog="python -m rsvo_env.training.sweep",
         description=__doc__.split("\n\n")[0],
         formatter_class=HelpFormatter,
     )

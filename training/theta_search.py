@@ -1,17 +1,18 @@
 """Search the fixed personalities that finish a scenario soonest: Ray Tune with Optuna's TPE.
 
-    python -m training.theta_search --scenario circular_swap --trials 200 --out runs/search_c6
-    python -m training.theta_search --scenario circular_swap --set num_agents=12 \\
+    python -m rsvo_env.training.theta_search --scenario circular_swap --trials 200 \\
+        --out runs/search_c6
+    python -m rsvo_env.training.theta_search --scenario circular_swap --set num_agents=12 \\
         --trials 300 --out runs/search_c12 [--address HOST:PORT]
 
 A trial is one theta vector (each agent's score log-uniform on [--low, --high]); its objective is
 the mean completion step of the scripted controller behind the R-CBF filter over ``--seeds``, all
-seeds in one batched env (:func:`training.personalities.evaluate`; an unfinished episode counts
-twice the time cap). The circular game runs the paper's controller (``nominal=move_to_goal``)
+seeds in one batched env (:func:`rsvo_env.training.personalities.evaluate`; an unfinished episode
+counts twice the time cap). The circular game runs the paper's controller (``nominal=move_to_goal``)
 unless ``--set nominal=...`` says otherwise. The search starts from the paper's alternating
-assignment and from equal scores, so its answer is never worse than either. Trials run one at a
-time by default, which makes the search a function of ``--search-seed`` (with concurrency, the
-sampler sees results in the order they arrive). Writes ``search.json`` in ``--out``.
+assignment and from equal scores, so its answer is never worse than either. Trials run one at a time
+by default, which makes the search a function of ``--search-seed`` (with concurrency, the sampler
+sees results in the order they arrive). Writes ``search.json`` in ``--out``.
 """
 
 from __future__ import annotations
@@ -24,13 +25,13 @@ from typing import Any
 
 import numpy as np
 
-from rsvo_env.cli.arguments import HelpFormatter, Parser, count
 from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.training import config as configs
+from rsvo_env.training import tune_runs
+from rsvo_env.training.personalities import FIELDS as STATS
+from rsvo_env.training.personalities import PAPER_GAME, alternating, evaluate, objective
+from rsvo_env.util.arguments import HelpFormatter, Parser, count
 from rsvo_env.util.validation import check_positive, shown
-from training import config as configs
-from training import tune_runs
-from training.personalities import FIELDS as STATS
-from training.personalities import PAPER_GAME, alternating, evaluate, objective
 
 
 def scenario_kwargs(scenario: str, assignments: list[str]) -> dict[str, Any]:
@@ -101,7 +102,7 @@ def search(params: dict[str, Any], args: argparse.Namespace) -> list[dict[str, A
 
 def main(argv: list[str] | None = None) -> int:
     p = Parser(
-        prog="python -m training.theta_search",
+        prog="python -m rsvo_env.training.theta_search",
         description=__doc__.split("\n\n")[0],
         formatter_class=HelpFormatter,
     )

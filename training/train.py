@@ -1,10 +1,10 @@
 """Train a nominal policy behind the R-CBF safety filter with Stable-Baselines3.
 
-    python -m training.train --scenario circular_swap --algo ppo --timesteps 6000000 \\
+    python -m rsvo_env.training.train --scenario circular_swap --algo ppo --timesteps 6000000 \\
         --seed 0 --weighting asymmetric --action residual --out runs/circular \\
         --time-limit 600
 
-Every agent of every env is one slot of a shared policy (``wrappers.SB3VecEnv`` over a
+Every agent of every env is one slot of a shared policy (``rsvo_env.wrappers.SB3VecEnv`` over a
 ``BatchedEnv``). The run directory gets ``config.yaml`` (the resolved config, written first),
 ``progress.csv`` and TensorBoard logs (``tb/``), ``validation.csv``, ``checkpoints/``,
 ``best_model.zip``, and at the end ``model.zip`` and ``summary.json``.
@@ -19,17 +19,17 @@ import time
 from pathlib import Path
 from typing import Any
 
-from rsvo_env.cli.arguments import HelpFormatter, Parser, count, output_problem
-from training import config as configs
-from training.algorithms import algorithm_class
+from rsvo_env.training import config as configs
+from rsvo_env.training.algorithms import algorithm_class
+from rsvo_env.util.arguments import HelpFormatter, Parser, count, output_problem
 
 # flags of the RLlib engine alone: given with another engine they would be ignored
 RLLIB_FLAGS = ("num_env_runners", "num_envs_per_env_runner", "address")
 
 
-def parser() -> argparse.ArgumentParser:
+def parser(prog: str = "python -m rsvo_env.training.train") -> argparse.ArgumentParser:
     p = Parser(
-        prog="python -m training.train",
+        prog=prog,
         description=__doc__.split("\n\n")[0],
         formatter_class=HelpFormatter,
     )
@@ -91,8 +91,8 @@ def train(
     from stable_baselines3.common.logger import configure
     from stable_baselines3.common.vec_env import VecMonitor
 
-    from training.callbacks import EpisodeStats, Progress, TimeLimit, Validation
-    from wrappers.sb3 import SB3VecEnv
+    from rsvo_env.training.callbacks import EpisodeStats, Progress, TimeLimit, Validation
+    from rsvo_env.wrappers.sb3 import SB3VecEnv
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -138,8 +138,8 @@ def train(
     return summary
 
 
-def main(argv: list[str] | None = None) -> int:
-    p = parser()
+def main(argv: list[str] | None = None, prog: str = "python -m rsvo_env.training.train") -> int:
+    p = parser(prog)
     args = p.parse_args(argv)
     try:
         cfg = build_config(args)
@@ -155,7 +155,7 @@ def main(argv: list[str] | None = None) -> int:
         flags = ", ".join("--" + f.replace("_", "-") for f in rllib_only)
         p.exit(2, f"{p.prog}: error: {flags} are for --engine rllib, not {cfg['engine']}\n")
     if cfg["engine"] == "rllib":
-        from training.rllib_engine import train_rllib
+        from rsvo_env.training.rllib_engine import train_rllib
 
         summary = train_rllib(
             cfg,

@@ -43,7 +43,7 @@ def fit(
 def parse(parser: Any, argv: list[str] | None) -> Any:
     """The arguments of a Tune command, with ``--address`` (a running cluster) and ``--out``
     (a directory that can be written) added and checked."""
-    from rsvo_env.cli.arguments import output_problem
+    from rsvo_env.util.arguments import output_problem
 
     parser.add_argument("--address", help="a running Ray cluster (default: a local instance)")
     parser.add_argument("--out", required=True)

@@ -1,13 +1,13 @@
 """GymnasiumVectorEnv: a ``BatchedEnv`` as a ``gymnasium.vector.VectorEnv``, one slot per agent.
 
-The batched env has an agent axis a ``VectorEnv`` does not (rewards are ``(num_envs,)`` there),
-so, as :class:`wrappers.sb3.SB3VecEnv` does, every agent of every env is a slot: E x N slots,
+The batched env has an agent axis a ``VectorEnv`` does not (rewards are ``(num_envs,)`` there), so,
+as :class:`rsvo_env.wrappers.sb3.SB3VecEnv` does, every agent of every env is a slot: E x N slots,
 slot ``e * N + i`` is agent i of env e, each with one agent's observation and action spaces
-(parameter sharing). All agents of an env end together. The autoreset mode is the batched
-env's, declared in ``metadata["autoreset_mode"]``: ``NEXT_STEP`` (the default here, and what
-Gymnasium's ``NormalizeObservation`` asks for) or ``SAME_STEP`` (``final_obs`` and
-``_final_obs`` per slot in the infos). So Gymnasium's vector wrappers
-(``RecordEpisodeStatistics``, ``NormalizeObservation``, ``ClipAction``, ...) apply unchanged.
+(parameter sharing). All agents of an env end together. The autoreset mode is the batched env's,
+declared in ``metadata["autoreset_mode"]``: ``NEXT_STEP`` (the default here, and what Gymnasium's
+``NormalizeObservation`` asks for) or ``SAME_STEP`` (``final_obs`` and ``_final_obs`` per slot in
+the infos). So Gymnasium's vector wrappers (``RecordEpisodeStatistics``, ``NormalizeObservation``,
+``ClipAction``, ...) apply unchanged.
 """
 
 from __future__ import annotations

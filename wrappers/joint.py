@@ -15,8 +15,8 @@ from typing import Any
 import gymnasium
 import numpy as np
 
+import rsvo_env
 from rsvo_env.util.validation import shown
-from wrappers.safety_filter import filtered_parallel_env
 
 
 class JointControlEnv(gymnasium.Env):
@@ -34,7 +34,7 @@ class JointControlEnv(gymnasium.Env):
         render_mode: str | None = None,
         **kwargs: Any,
     ) -> None:
-        self.parallel = filtered_parallel_env(
+        self.parallel = rsvo_env.parallel_env(
             scenario, safety_filter=safety_filter, render_mode=render_mode, **kwargs
         )
         base = self.parallel.unwrapped

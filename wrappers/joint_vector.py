@@ -1,13 +1,13 @@
 """JointVectorEnv: E joint-control envs as one ``gymnasium.vector.VectorEnv`` over the batched
 core, what ``gymnasium.make_vec(id, E, vectorization_mode="vector_entry_point")`` returns.
 
-Each slot is the env ``gymnasium.make(id)`` makes (:class:`wrappers.joint.JointControlEnv`):
-the same observation and action spaces (every agent's, concatenated in agent order), the reward
-summed over the agents, terminated when every agent is at its goal, truncated at the step cap.
-The infos hold what the joint env's info holds, one row per slot: every per-agent signal
-(E, N, ...), ``cost`` summed and ``min_distance`` the smallest over the agents, the running
-episodes' ``episode_*`` values, each with its ``_key`` mask. All E envs step as one array
-program (``rsvo_env.envs.vector.BatchedEnv``) instead of E Python envs one by one.
+Each slot is the env ``gymnasium.make(id)`` makes
+(:class:`rsvo_env.wrappers.joint.JointControlEnv`): the same observation and action spaces (every
+agent's, concatenated in agent order), the reward summed over the agents, terminated when every
+agent is at its goal, truncated at the step cap. The infos hold what the joint env's info holds, one
+row per slot: every per-agent signal (E, N, ...), ``cost`` summed and ``min_distance`` the smallest
+over the agents, the running episodes' ``episode_*`` values, each with its ``_key`` mask. All E envs
+step as one array program (``rsvo_env.envs.vector.BatchedEnv``) instead of E Python envs one by one.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.util.validation import shown
-from wrappers.gym_vector import MODES, OverBatched
+from rsvo_env.wrappers.gym_vector import MODES, OverBatched
 
 
 class JointVectorEnv(OverBatched):

@@ -5,10 +5,11 @@ from __future__ import annotations
 
 from typing import Any
 
+import rsvo_env
+from rsvo_env.envs.parallel import RSVOParallelEnv
 from rsvo_env.util.validation import shown
-from wrappers.joint import JointControlEnv
-from wrappers.joint_vector import JointVectorEnv
-from wrappers.safety_filter import filtered_aec_env, filtered_parallel_env
+from rsvo_env.wrappers.joint import JointControlEnv
+from rsvo_env.wrappers.joint_vector import JointVectorEnv
 
 
 def _scenario(id_scenario: str, kwargs: dict[str, Any]) -> str:
@@ -18,14 +19,15 @@ def _scenario(id_scenario: str, kwargs: dict[str, Any]) -> str:
         raise TypeError(
             f"scenario = {shown(given)}: this id names the scenario {shown(id_scenario)}; for "
             f"another, "
-            f"make that scenario's id, or wrappers.JointControlEnv({shown(given)}, ...) / "
+            f"make that scenario's id, or rsvo_env.wrappers.JointControlEnv({shown(given)}, ...) / "
             f"rsvo_env.parallel_env({shown(given)}, ...)"
         )
     return id_scenario
 
 
 def joint_env(id_scenario: str, **kwargs: Any) -> JointControlEnv:
-    """gymnasium's entry point: :class:`wrappers.joint.JointControlEnv` of the id's scenario."""
+    """gymnasium's entry point: :class:`rsvo_env.wrappers.joint.JointControlEnv` of the id's
+    scenario."""
     return JointControlEnv(_scenario(id_scenario, kwargs), **kwargs)
 
 
@@ -33,7 +35,7 @@ def joint_vector_env(
     id_scenario: str, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs: Any
 ) -> JointVectorEnv:
     """gymnasium's vector entry point (``make_vec(id, E, vectorization_mode=
-    "vector_entry_point")``): :class:`wrappers.joint_vector.JointVectorEnv` of the id's
+    "vector_entry_point")``): :class:`rsvo_env.wrappers.joint_vector.JointVectorEnv` of the id's
     scenario, E envs of the batched core; the spec's ``max_episode_steps`` is the step cap
     unless ``max_steps`` is given."""
     if max_episode_steps is not None and "max_cycles" not in kwargs:
@@ -41,11 +43,11 @@ def joint_vector_env(
     return JointVectorEnv(_scenario(id_scenario, kwargs), num_envs=num_envs, **kwargs)
 
 
-def parallel_env(id_scenario: str, **kwargs: Any):
-    """PettingZoo's parallel entry point: the id's scenario behind the filter."""
-    return filtered_parallel_env(_scenario(id_scenario, kwargs), **kwargs)
+def parallel_env(id_scenario: str, **kwargs: Any) -> RSVOParallelEnv:
+    """PettingZoo's parallel entry point: :func:`rsvo_env.parallel_env` of the id's scenario."""
+    return rsvo_env.parallel_env(_scenario(id_scenario, kwargs), **kwargs)
 
 
-def aec_env(id_scenario: str, **kwargs: Any):
-    """PettingZoo's AEC entry point."""
-    return filtered_aec_env(scenario=_scenario(id_scenario, kwargs), **kwargs)
+def aec_env(id_scenario: str, **kwargs: Any) -> Any:
+    """PettingZoo's AEC entry point: :func:`rsvo_env.env` of the id's scenario."""
+    return rsvo_env.env(_scenario(id_scenario, kwargs), **kwargs)

@@ -25,8 +25,8 @@ from rsvo_env.control.residual import Residual
 
 class ResidualAction(BaseParallelWrapper):
     """``gate_radius``: distance to the goal (physical units) under which the residual is
-    ignored; ``right_hand``: whether the scripted command includes the right-hand rule;
-    ``scale``: the residual's largest norm in speed limits (2 lets it reverse a full-speed
+    ignored; ``residual_right_hand``: whether the scripted command includes the right-hand rule;
+    ``residual_scale``: the residual's largest norm in speed limits (2 lets it reverse a full-speed
     command, 1 only turn it); ``yield_radius``: with it, a parked agent's residual acts again
     while a neighbour still en route is closer than this (physical units), so it may step aside;
     ``interaction_radius``: with it, the residual of an agent en route acts only while another
@@ -38,15 +38,19 @@ class ResidualAction(BaseParallelWrapper):
         self,
         env: Any,
         gate_radius: float = Residual.gate_radius,
-        right_hand: bool = Residual.right_hand,
-        scale: float = Residual.scale,
+        residual_right_hand: bool = Residual.right_hand,
+        residual_scale: float = Residual.scale,
         yield_radius: float | None = Residual.yield_radius,
         interaction_radius: float | None = Residual.interaction_radius,
         stall_gate: float | None = Residual.stall_gate,
     ) -> None:
         super().__init__(env)
         radii = (yield_radius, interaction_radius)
-        env.unwrapped.set_residual(Residual(gate_radius, right_hand, scale, *radii, stall_gate))
-        self.gate_radius, self.right_hand, self.scale = gate_radius, right_hand, scale
+        env.unwrapped.set_residual(
+            Residual(gate_radius, residual_right_hand, residual_scale, *radii, stall_gate)
+        )
+        # the keywords' names, as BatchedEnv and the training configs spell them
+        self.gate_radius = gate_radius
+        self.residual_right_hand, self.residual_scale = residual_right_hand, residual_scale
         self.yield_radius, self.interaction_radius = radii
         self.stall_gate = stall_gate

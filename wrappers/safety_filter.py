@@ -1,13 +1,16 @@
-"""RCBFSafetyFilter: every action goes through the responsibility-weighted QP.
+"""RCBFSafetyFilter: a filter stage in front of an env, for a filter of other parameters than
+the env's own or a stack of filters.
 
-A thin ``BaseParallelWrapper`` that overrides nothing of the step: it turns on the filter stage
-of the simulation core (``env.unwrapped.add_safety_filter``), which filters the control about to
-be integrated, on the state being integrated. So the control the filter certifies is the control
-applied, whatever wrappers sit between this one and the base env (action repeat, action noise,
-another filter), and the infos report exactly that control (``u_safe``) next to the requested one
-(``u_nominal``). Infeasible QPs apply the least-violating action, are flagged in ``infos`` and
-counted in the episode metrics; the nominal is never passed through. The wrapped env itself
-is filtered from then on (wrappers configure in place, ``docs/api.md``).
+Every env is filtered unless made with ``safety_filter=False`` (``rsvo_env.parallel_env``'s keywords
+set its filter); this wrapper adds a stage. A thin ``BaseParallelWrapper`` that overrides nothing of
+the step: it turns on a filter stage of the simulation core (``env.unwrapped.add_safety_filter``),
+which filters the control about to be integrated, on the state being integrated. So the control the
+filter certifies is the control applied, whatever wrappers sit between this one and the base env
+(action repeat, action noise, another filter), and the infos report exactly that control
+(``u_safe``) next to the requested one (``u_nominal``). Infeasible QPs apply the least-violating
+action, are flagged in ``infos`` and counted in the episode metrics; the nominal is never passed
+through. The wrapped env itself is filtered from then on (wrappers configure in place,
+``docs/api.md``).
 """
 
 from __future__ import annotations
@@ -16,10 +19,8 @@ from typing import Any
 
 from pettingzoo.utils import BaseParallelWrapper
 
-import rsvo_env
-from rsvo_env.envs.factory import filter_config, route
+from rsvo_env.envs.factory import filter_config
 from rsvo_env.filter.safety import SafetyFilter
-from rsvo_env.util.validation import check_flag
 
 
 class RCBFSafetyFilter(BaseParallelWrapper):
@@ -50,22 +51,3 @@ class RCBFSafetyFilter(BaseParallelWrapper):
         self.intervention_penalty = intervention_penalty
         base.add_safety_filter(self.safety_filter, intervention_penalty)
 
-
-def filtered_parallel_env(
-    scenario: str = "circular_swap", safety_filter: bool = True, **kwargs: Any
-):
-    """The registry's ParallelEnv: the scenario behind the filter (``safety_filter=False``: the
-    bare env). The filter's keywords (``gamma``, ``solver``, ``barrier``, ``split``,
-    ``neighbor_radius``, ``intervention_penalty``) go to the filter, the rest to the env, by
-    the same table as ``BatchedEnv``'s (``rsvo_env.envs.factory.route``)."""
-    safety_filter = check_flag(safety_filter, "safety_filter")
-    filter_kwargs = route(safety_filter, kwargs)
-    env = rsvo_env.parallel_env(scenario, **kwargs)
-    return RCBFSafetyFilter(env, **filter_kwargs) if safety_filter else env
-
-
-def filtered_aec_env(**kwargs: Any):
-    """The AEC version of :func:`filtered_parallel_env` (actions checked when submitted)."""
-    from rsvo_env.envs.parallel import aec_from_parallel
-
-    return aec_from_parallel(filtered_parallel_env(**kwargs))

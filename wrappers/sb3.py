@@ -19,7 +19,7 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.util.validation import shown
-from wrappers.parallel_batch import ParallelBatch
+from rsvo_env.wrappers.parallel_batch import ParallelBatch
 
 # Per-slot signals copied into every info (the filter's work and the collision cost).
 SLOT_SIGNALS = ("intervention", "cost", "feasible")

@@ -48,7 +48,7 @@ def head_on_swap(
 
 
 def main(argv: list[str] | None = None) -> int:
-    from rsvo_env.cli.arguments import Parser
+    from rsvo_env.util.arguments import Parser
 
     Parser(prog="rsvo demo", description=__doc__).parse_args(argv)
     out = head_on_swap()

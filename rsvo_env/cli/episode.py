@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 
 import rsvo_env
-from rsvo_env.cli.arguments import user_input
 from rsvo_env.envs.rendering import save_gif
+from rsvo_env.util.arguments import user_input
 
 
 def run(
@@ -26,8 +26,6 @@ def run(
 ) -> dict[str, Any]:
     """One episode under the scripted nominal controller; returns the episode metrics plus the
     trajectory (T+1, N, 2), theta and goals."""
-    from wrappers import RCBFSafetyFilter  # the cli is the top floor: it may use wrappers
-
     with user_input():  # what the library refuses here is the caller's value
         env = rsvo_env.parallel_env(
             scenario,
@@ -36,10 +34,9 @@ def run(
             render_size=render_size,
             keep_history=True,
             record_series=True,
+            safety_filter=safety_filter,
             **kwargs,
         )
-        if safety_filter:
-            env = RCBFSafetyFilter(env)
         options = {"theta": theta} if theta is not None else None
         env.reset(seed=seed, options=options)
     base = env.unwrapped

@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from rsvo_env.cli import figures, report
-from rsvo_env.cli.arguments import Parser, UserError, check_output, count
 from rsvo_env.cli.studies import Plan, circular, position_swap, ramp_merge, who_benefits
+from rsvo_env.util.arguments import Parser, UserError, check_output, count
 
 
 def reproduce(

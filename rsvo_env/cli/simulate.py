@@ -17,7 +17,9 @@ from typing import Any
 
 import rsvo_env
 from rsvo_env import dynamics
-from rsvo_env.cli.arguments import (
+from rsvo_env.cli.episode import run
+from rsvo_env.scenarios.base import NOMINALS
+from rsvo_env.util.arguments import (
     HelpFormatter,
     Parser,
     UserError,
@@ -25,9 +27,7 @@ from rsvo_env.cli.arguments import (
     count,
     user_input,
 )
-from rsvo_env.cli.episode import run
-from rsvo_env.cli.scene_file import read_scene
-from rsvo_env.scenarios.base import NOMINALS
+from rsvo_env.util.scene_file import read_scene
 from rsvo_env.util.validation import check_flag, check_seed
 
 # the run's own settings a scene file may hold too, and the flag that sets each

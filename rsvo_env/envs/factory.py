@@ -5,9 +5,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from rsvo_env.filter.safety import FilterConfig
+from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.scenarios import Scenario, make_scenario
 from rsvo_env.sim.core import REWARDS, Simulator
+from rsvo_env.util.validation import check_flag
 
 SIM_KEYWORDS = (
     "num_obs_neighbors",
@@ -47,11 +48,30 @@ def make_simulator(
     num_envs: int = 1,
     max_cycles: int | None = None,
     record_series: bool = False,
+    safety_filter: bool = True,
     **kwargs: Any,
 ) -> Simulator:
-    """The core for a scenario (name or instance). ``kwargs`` holds the simulator's keywords
-    (:data:`SIM_KEYWORDS`) and the scenario's parameters; ``max_cycles`` is PettingZoo's name for
-    ``max_steps``. Both adapters are built through here."""
+    """The core for a scenario (name or instance), behind the safety filter unless
+    ``safety_filter=False``: the one safety default of every entry point, since both adapters
+    are built through here. ``kwargs`` holds the filter's keywords (:data:`FILTER_KEYWORDS`),
+    the simulator's (:data:`SIM_KEYWORDS`) and the scenario's parameters; ``max_cycles`` is
+    PettingZoo's name for ``max_steps``."""
+    safety_filter = check_flag(safety_filter, "safety_filter")
+    filter_kwargs = route(safety_filter, kwargs)
+    sim = _simulator(scenario, num_envs, max_cycles, record_series, kwargs)
+    if safety_filter:
+        penalty = filter_kwargs.pop("intervention_penalty", 0.0)
+        sim.add_filter(SafetyFilter(filter_config(sim.scenario, **filter_kwargs)), penalty)
+    return sim
+
+
+def _simulator(
+    scenario: str | Scenario,
+    num_envs: int,
+    max_cycles: int | None,
+    record_series: bool,
+    kwargs: dict[str, Any],
+) -> Simulator:
     if max_cycles is not None:
         if "max_steps" in kwargs:
             raise TypeError("give max_steps or its PettingZoo name max_cycles, not both")

@@ -1,8 +1,9 @@
 """RSVOParallelEnv: the paper's scenarios as a PettingZoo ParallelEnv, the E = 1 dict adapter
 over the simulation core (:class:`rsvo_env.sim.core.Simulator`).
 
-The env has no safety filter of its own; ``wrappers.RCBFSafetyFilter`` turns on the core's filter
-stage through :meth:`RSVOParallelEnv.add_safety_filter`.
+Every action goes through the safety filter (a stage of the core's step) unless
+``safety_filter=False``; ``rsvo_env.wrappers.RCBFSafetyFilter`` adds a filter stage to an env
+(:meth:`RSVOParallelEnv.add_safety_filter`).
 """
 
 from __future__ import annotations
@@ -82,6 +83,7 @@ class RSVOParallelEnv(ParallelEnv):
         render_size: int = 600,
         keep_history: bool = False,
         record_series: bool = False,
+        safety_filter: bool = True,
         **kwargs: Any,
     ) -> None:
         """``keep_history``: keep every step's positions in ``history`` (the whole trajectory);
@@ -89,7 +91,10 @@ class RSVOParallelEnv(ParallelEnv):
         the episode. ``record_series``: keep the per-step series the paper plots (each step's
         smallest and mean nearest distance, ``min_distance_series`` and
         ``avg_min_distance_series`` of :attr:`episode_metrics`); off by default, for the same
-        reason. ``kwargs``: ``num_obs_neighbors``, ``frame``, ``weighting``,
+        reason. ``safety_filter``: every action through the R-CBF filter (False: the bare
+        env, the nominal applied as given). ``kwargs``: the filter's ``gamma``, ``solver``,
+        ``barrier``, ``split``, ``neighbor_radius``, ``intervention_penalty``;
+        ``num_obs_neighbors``, ``frame``, ``weighting``,
         ``reward_progress``, ``reward_time``, ``reward_goal``, ``reward_team``, ``stall_clock``,
         ``max_cycles``, and every scenario parameter."""
         keep_history = check_flag(keep_history, "keep_history")
@@ -98,7 +103,9 @@ class RSVOParallelEnv(ParallelEnv):
             raise ValueError(
                 f"render_mode = {shown(render_mode)}; use one of {self.metadata['render_modes']}"
             )
-        self.sim = make_simulator(scenario, num_envs=1, record_series=record_series, **kwargs)
+        self.sim = make_simulator(
+            scenario, num_envs=1, record_series=record_series, safety_filter=safety_filter, **kwargs
+        )
         self.scenario = self.sim.scenario
         # what print(env) shows, through any PettingZoo wrapper: the scenario, PettingZoo-style
         self.metadata = {**self.metadata, "name": f"rsvo_{self.scenario.name}_v0"}
@@ -146,11 +153,12 @@ class RSVOParallelEnv(ParallelEnv):
 
     def set_residual(self, residual: Residual | None) -> None:
         """Residual actions by ``residual``'s rule, or off (None); see
-        ``wrappers.ResidualAction``."""
+        ``rsvo_env.wrappers.ResidualAction``."""
         self.sim.set_residual(residual)
 
     def add_safety_filter(self, flt: SafetyFilter, intervention_penalty: float = 0.0) -> None:
-        """Turn on (another) filter stage of the core's step; see ``wrappers.RCBFSafetyFilter``."""
+        """Turn on (another) filter stage of the core's step; see
+        ``rsvo_env.wrappers.RCBFSafetyFilter``."""
         self.sim.add_filter(flt, intervention_penalty)
 
     def state(self) -> NDArray[np.float32]:

@@ -3,7 +3,7 @@
 Entry points are strings (docs/api.md): the core names the wrappers here and nowhere
 else, and they are imported only when ``make`` is called. PettingZoo has a registry from 1.27 on;
 with 1.24 to 1.26 (still pinned by some clients, e.g. AgileRL) the PettingZoo ids are not
-registered and ``rsvo_env.parallel_env`` / ``wrappers.filtered_parallel_env`` make the same envs.
+registered and ``rsvo_env.parallel_env`` / ``rsvo_env.env`` make the same envs.
 """
 
 from __future__ import annotations
@@ -51,8 +51,8 @@ def register_all() -> None:
         if env_id not in gymnasium.registry:
             gymnasium.register(
                 id=env_id,
-                entry_point="wrappers.registered:joint_env",
-                vector_entry_point="wrappers.registered:joint_vector_env",
+                entry_point="rsvo_env.wrappers.registered:joint_env",
+                vector_entry_point="rsvo_env.wrappers.registered:joint_vector_env",
                 kwargs=kwargs,
                 max_episode_steps=SCENARIOS[scenario].defaults["max_steps"],
             )
@@ -64,7 +64,7 @@ def register_all() -> None:
         ):
             if env_id not in registry:
                 pettingzoo.register(
-                    env_type, env_id, f"wrappers.registered:{factory}", kwargs=dict(kwargs)
+                    env_type, env_id, f"rsvo_env.wrappers.registered:{factory}", kwargs=dict(kwargs)
                 )
 
 

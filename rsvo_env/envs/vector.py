@@ -16,11 +16,10 @@ from numpy.typing import NDArray
 
 from rsvo_env.control.residual import Residual
 from rsvo_env.envs import global_state
-from rsvo_env.envs.factory import filter_config, make_simulator, route
-from rsvo_env.filter.safety import SafetyFilter
+from rsvo_env.envs.factory import make_simulator
 from rsvo_env.responsibility.svo import Weighting
 from rsvo_env.scenarios import Scenario
-from rsvo_env.util.validation import check_flag, check_seed, check_vectors, shown
+from rsvo_env.util.validation import check_seed, check_vectors, shown
 
 AUTORESET_MODES = ("same_step", "next_step")
 
@@ -88,8 +87,6 @@ class BatchedEnv:
         """``kwargs``: the filter's ``gamma``, ``solver``, ``barrier``, ``split``,
         ``neighbor_radius``; ``num_obs_neighbors``, ``frame``, ``weighting``, ``reward_*``,
         ``max_cycles``; and every scenario parameter."""
-        safety_filter = check_flag(safety_filter, "safety_filter")
-        filter_kwargs = route(safety_filter, kwargs)
         if action not in ("direct", "residual"):
             raise ValueError(f"action = {shown(action)}; use 'direct' or 'residual'")
         if autoreset_mode not in AUTORESET_MODES:
@@ -101,12 +98,10 @@ class BatchedEnv:
             gate_radius, residual_right_hand, residual_scale, yield_radius, interaction_radius,
             stall_gate,
         )  # fmt: skip
-        self.sim = make_simulator(scenario, num_envs=num_envs, **kwargs)
+        self.sim = make_simulator(
+            scenario, num_envs=num_envs, safety_filter=safety_filter, **kwargs
+        )
         self.scenario = self.sim.scenario
-        if safety_filter:
-            penalty = filter_kwargs.pop("intervention_penalty", 0.0)
-            config = filter_config(self.scenario, **filter_kwargs)
-            self.sim.add_filter(SafetyFilter(config), penalty)
         if action == "residual":
             self.sim.set_residual(residual)
         self.num_envs, self.num_agents = self.sim.num_envs, self.sim.n
