@@ -66,8 +66,10 @@ def main(argv: list[str] | None = None) -> int:
         "",
         '| id | `"vector_entry_point"` [env-steps/s] | `"sync"` [env-steps/s] | ratio |',
         "|---|---|---|---|",
-        *(f"| `{r['id']}` | {r['vector']:,.0f} | {r['sync']:,.0f} | {r['ratio']:.1f}x |"
-          for r in rows),  # fmt: skip
+        *(
+            f"| `{r['id']}` | {r['vector']:,.0f} | {r['sync']:,.0f} | {r['ratio']:.1f}x |"
+            for r in rows
+        ),  # fmt: skip
         "",
     ]
     args.out.write_text("\n".join(lines))

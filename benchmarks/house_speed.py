@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results" / "house_speed.md"
 
 # each case: agent-steps per second over ``seconds`` after a warm-up, printed as JSON
-CASE = r'''
+CASE = r"""
 import json, sys, time
 import numpy as np
 case, seconds = sys.argv[1], float(sys.argv[2])
@@ -77,7 +77,7 @@ elif case == "double 100":
     env.reset(seed=0)
     r = rate(lambda: env.step(env.nominal_actions()), 100)
 print(json.dumps(r))
-'''
+"""
 CASES = ["batched 16x256", "batched 64x32", "single 6", "arrays 1000", "arrays 10000",
          "double 100"]  # fmt: skip
 
@@ -109,9 +109,7 @@ def main() -> int:
                 trees = [("now", ROOT), ("other", other)]
                 for name, tree in trees if block % 2 == 0 else trees[::-1]:
                     for case in args.cases:
-                        rates.setdefault((name, case), []).append(
-                            measure(tree, case, args.seconds)
-                        )
+                        rates.setdefault((name, case), []).append(measure(tree, case, args.seconds))
                 print(f"block {block + 1}/{args.blocks}", flush=True)
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(other)],

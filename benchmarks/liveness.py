@@ -61,8 +61,10 @@ ROTATIONS = 10  # circular swaps, each turned by a random angle
 NO_TURN = {"rorca_route": False, "deadlock_resolution": "none"}
 # ORCA behind the filter: no routing, no right-hand rule, no goal rule, ORCA's split and horizon
 BARE = {**NO_TURN, "rorca_goal_reach": 0.0, "weighting": "symmetric", "rorca_tau": 2.0}
-BARE_LABEL = ("no routing, no right-hand rule, the goal rule off, the symmetric weighting, horizon"
-              " 2 s: ORCA's controller")
+BARE_LABEL = (
+    "no routing, no right-hand rule, the goal rule off, the symmetric weighting, horizon"
+    " 2 s: ORCA's controller"
+)
 DIAGNOSIS = (
     ("R-ORCA routed behind the filter (the crowd table's setting)", {}),
     ("routing off (the right-hand rule turns R-ORCA's velocity again)", {"rorca_route": False}),

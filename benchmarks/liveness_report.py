@@ -187,7 +187,8 @@ def diagnosis_section(rows: list, long: list = (), start: float = 25.0) -> list[
         " (the last row: ORCA on the same starts and goals). Without the filter nothing keeps"
         " the bodies apart (the closest pair).",
         "",
-        "| configuration | " + " | ".join(f"at goal, {t:.0f} s" for t in DIAGNOSIS_MARKS)
+        "| configuration | "
+        + " | ".join(f"at goal, {t:.0f} s" for t in DIAGNOSIS_MARKS)
         + f" | {DIAGNOSIS_MARKS[-1]:.0f} s, over ORCA's | least over ORCA's from {start:.0f} s"
         " (at) | closest pair [m] |",
         "|---|" + "---|" * (len(DIAGNOSIS_MARKS) + 3),
@@ -203,7 +204,8 @@ def diagnosis_section(rows: list, long: list = (), start: float = 25.0) -> list[
             "",
             f"Run on to {BIG_CAP * DT:.0f} s (the crowd table's setting is the section above):",
             "",
-            "| configuration | " + " | ".join(f"at goal, {t:.0f} s" for t in BIG_MARKS)
+            "| configuration | "
+            + " | ".join(f"at goal, {t:.0f} s" for t in BIG_MARKS)
             + " | closest pair [m] |",
             "|---|" + "---|" * (len(BIG_MARKS) + 1),
         ]

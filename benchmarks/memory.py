@@ -108,8 +108,9 @@ def step_ratios(n: int, blocks: int = 3, steps: int = 3) -> dict[str, float]:
 
     envs = {}
     for case in CASES:
-        env = BatchedEnv("crowd", num_envs=1, num_agents=n, theta_range=(1.0, 10.0),
-                         nominal="move_to_goal")
+        env = BatchedEnv(
+            "crowd", num_envs=1, num_agents=n, theta_range=(1.0, 10.0), nominal="move_to_goal"
+        )
         env.reset(seed=0, options={"theta": scores(n, case)})
         env.step(env.nominal_actions())
         envs[case] = env

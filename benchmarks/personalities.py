@@ -297,9 +297,7 @@ def choices(trace: dict[str, Any]) -> str:
     th, en_route = trace["theta"], trace["dist"] > trace["tol"]
     low = trace["range"][0]
     at_low = (th[en_route] <= low * 1.01).mean() if en_route.any() else np.nan
-    ratio = np.nanmax(
-        np.where(en_route, th, np.nan).max(1) / np.where(en_route, th, np.nan).min(1)
-    )
+    ratio = np.nanmax(np.where(en_route, th, np.nan).max(1) / np.where(en_route, th, np.nan).min(1))
     return f"{at_low:.0%} of agent-steps en route at the egoistic end, largest ratio {ratio:.2f}"
 
 

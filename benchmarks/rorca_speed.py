@@ -43,8 +43,17 @@ def stage_against_orca(n: int, blocks: int) -> dict:
         theta = np.random.default_rng(1).uniform(1, 10, (1, n))
         parked = np.zeros((1, n), bool)
         rules = rorca.Rules(parked, orca.goals[None], np.zeros((1, n), bool))
-        args = (x, v, pref, ROUTED["rorca_pad"] * sc.radii, theta, ["asymmetric"],
-                sc.params["u_max"], DT, ROUTED["rorca_tau"])
+        args = (
+            x,
+            v,
+            pref,
+            ROUTED["rorca_pad"] * sc.radii,
+            theta,
+            ["asymmetric"],
+            sc.params["u_max"],
+            DT,
+            ROUTED["rorca_tau"],
+        )
         # with the crowd's own velocities, and every agent at rest: then every one counts as
         # stuck and every one probes every heading (the most the rule can cost)
         route = (x, v, orca.goals[None], parked, pref, sc.params["safety_radius"],
@@ -149,11 +158,14 @@ def main(argv: list[str] | None = None) -> int:
         " routing [us/agent-step] | R-ORCA routed / ORCA | routing, every agent at rest"
         " [us/agent-step] | R-ORCA routed / ORCA, every agent at rest |",
         "|---|---|---|---|---|---|---|---|",
-        *(f"| {r['n']:,} | {r['orca']:.2f} | {r['rorca']:.2f} | {r['ratio']:.2f} |"
-          f" {r['route']:.2f} | {r['routed_ratio']:.2f} | {r['still']:.2f} |"
-          f" {r['still_ratio']:.2f} |" for r in rows),  # fmt: skip
+        *(
+            f"| {r['n']:,} | {r['orca']:.2f} | {r['rorca']:.2f} | {r['ratio']:.2f} |"
+            f" {r['route']:.2f} | {r['routed_ratio']:.2f} | {r['still']:.2f} |"
+            f" {r['still_ratio']:.2f} |"
+            for r in rows
+        ),  # fmt: skip
         "",
-        "What a user calls, `BatchedEnv(\"crowd\", num_envs=1, num_agents=N).nominal_actions()`"
+        'What a user calls, `BatchedEnv("crowd", num_envs=1, num_agents=N).nominal_actions()`'
         " (R-ORCA's stage with all around it: move-to-goal, routing, the rules' clocks, the"
         " model's inputs, the normalised actions), in the env's own crowd, against ORCA's C++"
         " step in its crowd, alternating blocks:",
@@ -161,15 +173,17 @@ def main(argv: list[str] | None = None) -> int:
         "| N | ORCA's C++ step [us/agent-step] | `nominal_actions()` [us/agent-step] |"
         " `nominal_actions()` / ORCA |",
         "|---|---|---|---|",
-        *(f"| {r['n']:,} | {r['orca']:.2f} | {r['public']:.2f} | {r['ratio']:.2f} |"
-          for r in public),  # fmt: skip
+        *(
+            f"| {r['n']:,} | {r['orca']:.2f} | {r['public']:.2f} | {r['ratio']:.2f} |"
+            for r in public
+        ),  # fmt: skip
         "",
         "Routing around knots (`rsvo_env.control.rorca_route`) timed on the same crowd, with its"
         " agents' velocities (ORCA's), and with every agent at rest: then every one counts as"
         " stuck, and every agent farther from its goal than the look-ahead probes every heading"
         " (the most the rule can cost; a knot of that size is what the rule keeps from forming).",
         "",
-        "`BatchedEnv(\"crowd\", num_envs=256, num_agents=16, safety_filter=True)`: a step with "
+        '`BatchedEnv("crowd", num_envs=256, num_agents=16, safety_filter=True)`: a step with '
         f"given actions {env['given'] / 1e6:.2f} M agent-steps/s, a step with "
         f"`nominal_actions()` {env['nominal'] / 1e6:.2f} M, {env['ratio']:.2f}x of it (R-ORCA"
         " routed around knots, the crowd's default). The same crowd unrouted"

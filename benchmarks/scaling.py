@@ -8,10 +8,9 @@
    block (the least disturbed by other processes on a shared machine). Our smallest distance
    over every step is checked against R.
 2. Double-integrator crowds at N in {100, 1,000}: the filtered step (acceleration box; the
-   stopping-segment, backup and braking barriers,
-   no user radius) plus the exact zero-order-hold step, per agent-step and against the
-   single integrator's cost at the same N; the share of infeasible agent-steps; every 20th step
-   the actions and flags are compared with the all-pairs filter's.
+   stopping-segment, backup and braking barriers, no user radius) plus the exact zero-order-hold
+   step, per agent-step and against the single integrator's cost at the same N; the share of
+   infeasible agent-steps; every 20th step, actions and flags against the all-pairs filter's.
 3. A 10,000-agent crowd for 1,000 filtered steps through ``BatchedEnv`` (scripted nominal), and
    on plain arrays, each in a fresh process: wall time, collisions, peak memory per agent.
 
@@ -271,8 +270,9 @@ def big_crowd(mode: str, n: int, steps: int) -> dict:
     if mode == "env":
         from rsvo_env.envs.vector import BatchedEnv
 
-        venv = BatchedEnv("crowd", num_envs=1, num_agents=n, max_cycles=steps + 1,
-                          nominal="move_to_goal")  # the move-to-goal of section 1
+        # the move-to-goal of section 1
+        kwargs = {"num_agents": n, "max_cycles": steps + 1, "nominal": "move_to_goal"}
+        venv = BatchedEnv("crowd", num_envs=1, **kwargs)
         venv.reset(seed=0)
         setup, peak = time.perf_counter() - t0, max(peak, rss())
         smallest, t1 = np.inf, time.perf_counter()

@@ -133,8 +133,11 @@ def table(first: str, rows: dict[str, dict[str, float]]) -> list[str]:
         f"| {first} | agent-steps/s (updates included) | env step | of which filter | policy "
         "forward | PPO update |",
         "|---|---|---|---|---|---|",
-        *(f"| {label} | {r['rate']:.0f} | {r['env']:.0%} | {r['filter']:.0%} | "
-          f"{r['policy']:.0%} | {r['update']:.0%} |" for label, r in rows.items()),  # fmt: skip
+        *(
+            f"| {label} | {r['rate']:.0f} | {r['env']:.0%} | {r['filter']:.0%} | "
+            f"{r['policy']:.0%} | {r['update']:.0%} |"
+            for label, r in rows.items()
+        ),  # fmt: skip
     ]
 
 
@@ -182,8 +185,13 @@ def main() -> int:
         f"({hyper_note(cfg)}), {rollout_size(cfg)} agent-steps an update; best of the "
         "alternating runs. Shares are of wall time; the filter is part of the env step.",
         "",
-        *table("path", {f"BatchedEnv, {cfg['num_envs']} envs": best["batched"],
-                        "one ParallelEnv": best["single"]}),  # fmt: skip
+        *table(
+            "path",
+            {
+                f"BatchedEnv, {cfg['num_envs']} envs": best["batched"],
+                "one ParallelEnv": best["single"],
+            },
+        ),  # fmt: skip
     ]
     ceiling = 1.0 / best["single"]["update"]
     lines += [

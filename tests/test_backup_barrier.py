@@ -111,8 +111,15 @@ def test_every_qp_is_feasible_in_states_built_at_h_zero(family, k, E):
     feasible_all, worst_drop = True, np.inf
     for dt, gamma_dt, scale in (
         # the backup barrier accepts any dt: steps far longer than a body's braking time too
-        [(0.01, 1.0, 1e-3), (0.05, 0.1, 1.0), (0.1, 1.0, 1e3), (0.1, 0.5, 1.0), (0.02, 0.7, 1e3),
-         (0.5, 1.0, 1.0), (2.0, 0.5, 1e-3)]
+        [
+            (0.01, 1.0, 1e-3),
+            (0.05, 0.1, 1.0),
+            (0.1, 1.0, 1e3),
+            (0.1, 0.5, 1.0),
+            (0.02, 0.7, 1e3),
+            (0.5, 1.0, 1.0),
+            (2.0, 0.5, 1e-3),
+        ]
     ):
         m = E // 7
         p, v, radii, a = cluster(rng, family, m, k, scale)

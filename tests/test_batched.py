@@ -176,8 +176,16 @@ def test_a_bad_team_share_is_refused(share):
         ("position_swap", {"deadlock_resolution": "none", "theta_range": (1.0, 10.0)}),
         ("circular_swap", {"reward_team": 0.5, "max_steps": 150}),
         ("crowd", {"num_agents": 5, "theta_range": (1.0, 10.0), "num_obs_neighbors": 2}),
-        ("crowd", {"num_agents": 6, "theta_range": (1.0, 10.0), "rh_hold": 0.2,
-                   "rorca_route": False, "rorca_goal_hold": 0.5}),
+        (
+            "crowd",
+            {
+                "num_agents": 6,
+                "theta_range": (1.0, 10.0),
+                "rh_hold": 0.2,
+                "rorca_route": False,
+                "rorca_goal_hold": 0.5,
+            },
+        ),
     ],
 )
 def test_the_fused_after_step_equals_the_hooks_bit_for_bit(name, kwargs):

@@ -149,7 +149,13 @@ def all_pairs_double_integrator(flt, x, v, nominal, theta):
         I,
         J,
         barriers.BarrierSpec(
-            cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, cfg.barrier, cfg.split, cfg.gamma2,
+            cfg.gamma,
+            cfg.safety_radius,
+            cfg.lo,
+            cfg.hi,
+            cfg.barrier,
+            cfg.split,
+            cfg.gamma2,
             cfg.dt,
         ),
     )
@@ -244,7 +250,11 @@ def test_culled_equals_all_pairs_in_any_units(seed, scale, kind, weighting):
         rows = barriers.single_integrator_rows(x, w, I, J, cfg.gamma, scale, cfg.lo, cfg.hi)
     else:
         rows = barriers.double_integrator_rows(
-            x, v, w, I, J,
+            x,
+            v,
+            w,
+            I,
+            J,
             barriers.BarrierSpec(cfg.gamma, scale, cfg.lo, cfg.hi, cfg.barrier, dt=cfg.dt),
         )
     ref, feasible = exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)[:2]

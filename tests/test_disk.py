@@ -120,7 +120,7 @@ def test_units_scale_the_velocity_exactly(seed, kind, K, room, scale):
     one, v = solved(rows, p, 1.0)
     other, w = solved(big, p * scale, scale)
     assert one == other
-    assert (w / scale == v).all(), (w / scale - v)
+    assert (w / scale == v).all(), w / scale - v
 
 
 def test_an_empty_row_set_clips_to_the_disk():

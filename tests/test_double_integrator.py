@@ -99,7 +99,8 @@ def test_one_neighbour_is_always_feasible(seed, ti, tj, dt):
             gamma=float(rng.uniform(0.1, 5.0)),
             safety_radius=DS,
             u_max=A_MAX,
-            dynamics="double_integrator", barrier="braking",
+            dynamics="double_integrator",
+            barrier="braking",
             dt=dt,
         )
     )
@@ -132,7 +133,8 @@ def test_random_pairs_keep_their_distance_under_zoh():
             safety_radius=DS,
             u_max=A_MAX,
             dt=dt,
-            dynamics="double_integrator", barrier="braking",
+            dynamics="double_integrator",
+            barrier="braking",
             neighbor_radius=1000.0,
         )
     )

@@ -175,7 +175,9 @@ def test_circular_swap_with_filter_does_not():
 
 def test_rewards_progress_and_goal_bonus():
     env = rsvo_env.parallel_env(
-        "position_swap", deadlock_resolution="none", start=((-4.0, -4.0), (4.0, -4.0)),
+        "position_swap",
+        deadlock_resolution="none",
+        start=((-4.0, -4.0), (4.0, -4.0)),
         safety_filter=False,
     )
     env.reset(seed=0)

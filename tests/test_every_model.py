@@ -139,8 +139,10 @@ def test_a_held_unicycle_turns_left_and_right_by_full_turns():
     model = dynamics.MODELS["unicycle"]
     turn_steps = 2 * np.pi / 3.0 / 0.05
     c = np.array([[[0.0, -1.0]]])  # the agent faces +y: c straight behind
-    w = [float(model.track(_State([np.pi / 2], k), c, PARAMS, None)[0, 0, 1])
-         for k in (0, int(turn_steps) + 1, int(2 * turn_steps) + 1, int(3 * turn_steps) + 1)]
+    w = [
+        float(model.track(_State([np.pi / 2], k), c, PARAMS, None)[0, 0, 1])
+        for k in (0, int(turn_steps) + 1, int(2 * turn_steps) + 1, int(3 * turn_steps) + 1)
+    ]
     assert abs(w[0]) == 3.0 and w[1:] == [3.0, -3.0, 3.0]  # |c| / l = 5, capped
     # c ahead: a held agent keeps tracking it
     ahead = model.track(_State([np.pi / 2], 10_000), np.array([[[0.0, 1.0]]]), PARAMS, None)

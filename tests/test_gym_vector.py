@@ -178,8 +178,11 @@ def test_make_vec_vector_entry_point_is_the_sync_vector_of_gymnasium_make(env_id
     assert isinstance(vec, VectorEnv) and type(vec).__name__ == "JointVectorEnv"
     assert vec.single_observation_space == sync.single_observation_space
     assert vec.single_action_space == sync.single_action_space
-    assert vec.metadata["autoreset_mode"] == sync.metadata["autoreset_mode"] == (
-        AutoresetMode.NEXT_STEP)
+    assert (
+        vec.metadata["autoreset_mode"]
+        == sync.metadata["autoreset_mode"]
+        == (AutoresetMode.NEXT_STEP)
+    )
     got, want = vec.reset(seed=3)[0], sync.reset(seed=3)[0]
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-6)
     rng = np.random.default_rng(0)

@@ -145,7 +145,8 @@ def test_import_linter_contracts_are_kept(tmp_path):
 def test_the_layout_puts_the_mapped_folders_inside_the_package():
     """What the contract and the type checker read is what the wheel installs."""
     assert layout.mapped_folders() == {
-        "rsvo_env.wrappers": "wrappers", "rsvo_env.training": "training"
+        "rsvo_env.wrappers": "wrappers",
+        "rsvo_env.training": "training",
     }
 
 

@@ -188,8 +188,9 @@ def test_a_double_integrator_through_a_field_of_circles_never_enters_one(seed):
     grid = np.stack(np.meshgrid([10.0, 20.0, 30.0], [8.0, 18.0, 28.0]), -1).reshape(-1, 2)
     circles = np.c_[grid + rng.uniform(-1, 1, grid.shape), rng.uniform(0.5, 1.5, len(grid))]
     obstacles = Obstacles.of(circles=circles)
-    flt = SafetyFilter(FilterConfig(dynamics="double_integrator",
-                                    barrier="braking", u_max=1.0, gamma=2.0, dt=0.05))
+    flt = SafetyFilter(
+        FilterConfig(dynamics="double_integrator", barrier="braking", u_max=1.0, gamma=2.0, dt=0.05)
+    )
     near = np.inf
     for y in np.linspace(4.0, 32.0, 8):
         x, v = np.array([[0.0, y]]), np.zeros((1, 2))

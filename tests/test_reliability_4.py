@@ -244,8 +244,12 @@ def test_6_a_steps_memory_is_the_documented_bound_of_agents_and_pairs(spread, n)
     from rsvo_env.scenarios import Crowd
 
     api = " ".join((Path(__file__).parents[1] / "docs" / "api.md").read_text().split())
-    per_agent, per_pair = (int(x.replace(",", "")) for x in re.search(
-        r"at most ([\d,]+) bytes an agent plus ([\d,]+) bytes a pair examined", api).groups())
+    per_agent, per_pair = (
+        int(x.replace(",", ""))
+        for x in re.search(
+            r"at most ([\d,]+) bytes an agent plus ([\d,]+) bytes a pair examined", api
+        ).groups()
+    )
     rng = np.random.default_rng(n)
     x = Crowd(num_agents=n)._spread(rng)
     theta = np.exp(rng.uniform(*np.log(spread), n))

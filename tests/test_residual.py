@@ -16,6 +16,7 @@ def test_a_zero_residual_is_the_scripted_controller(nominal):
     exactly; for move-to-goal also the whole episode against the scripted actions, to the
     float32 precision of ``nominal_actions()`` (R-ORCA feeds the velocity back, so that
     rounding grows along an episode: its comparison is the exact one)."""
+
     def make():
         return rsvo_env.parallel_env("circular_swap", nominal=nominal)
 
@@ -77,8 +78,7 @@ def test_batched_residuals_equal_the_wrapper(name, yield_radius, interaction_rad
     kw = {"max_steps": 60, "nominal": "move_to_goal"}
     venv = BatchedEnv(name, num_envs=E, action="residual", gate_radius=0.5, **kw, **radii)
     singles = [
-        wrappers.ResidualAction(rsvo_env.parallel_env(name, **kw),
-                                **radii)  # fmt: skip
+        wrappers.ResidualAction(rsvo_env.parallel_env(name, **kw), **radii)  # fmt: skip
         for _ in range(E)
     ]
     obs, _ = venv.reset(seed=4)

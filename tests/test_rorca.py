@@ -396,4 +396,3 @@ def test_the_compiled_stage_equals_r_orca_assembled_from_its_parts(n, seed, K, l
     same = (got == expected).all(axis=1)
     assert same.mean() >= 0.95
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-14 * 2.0)
-

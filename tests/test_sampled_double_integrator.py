@@ -46,7 +46,8 @@ def pairs_filter(dt, gamma_dt):
         safety_radius=DS,
         u_max=A_MAX,
         dt=dt,
-        dynamics="double_integrator", barrier="braking",
+        dynamics="double_integrator",
+        barrier="braking",
         neighbor_radius=1e4,
     )
     return SafetyFilter(cfg)
@@ -152,8 +153,12 @@ def test_one_neighbour_is_feasible_at_any_gamma(seed, dt, gamma_dt, ti, tj):
     p[0] -= dp / np.linalg.norm(dp) * shrink
     assert braking_h(p, v, A_MAX)[0] >= -1e-9
     cfg = FilterConfig(
-        gamma=gamma_dt / dt, safety_radius=DS, u_max=A_MAX, dt=dt, dynamics="double_integrator",
-                                                                   barrier="braking"
+        gamma=gamma_dt / dt,
+        safety_radius=DS,
+        u_max=A_MAX,
+        dt=dt,
+        dynamics="double_integrator",
+        barrier="braking",
     )
     nominal = rng.uniform(-A_MAX, A_MAX, (2, 2))
     res = SafetyFilter(cfg).filter(p, nominal, [ti, tj], velocities=v)

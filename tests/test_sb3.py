@@ -93,9 +93,7 @@ def test_single_parallel_env_path_equals_the_batched_one():
     """SB3VecEnv over one filtered ParallelEnv (wrapped, dicts) gives the same slots, values and
     end-of-episode infos as over a BatchedEnv of one env, through an auto-reset."""
     kwargs = {"num_agents": 4, "max_steps": 12}
-    single = wrappers.SB3VecEnv(
-        wrappers.ResidualAction(rsvo_env.parallel_env("crowd", **kwargs))
-    )
+    single = wrappers.SB3VecEnv(wrappers.ResidualAction(rsvo_env.parallel_env("crowd", **kwargs)))
     batched = wrappers.SB3VecEnv(BatchedEnv("crowd", num_envs=1, action="residual", **kwargs))
     assert single.num_envs == batched.num_envs == 4
     for env in (single, batched):

@@ -91,8 +91,9 @@ def test_double_integrator_crowd_flags_every_infeasible_step():
     p, _, goals = sc.initial_state(np.random.default_rng(4))
     v = np.zeros_like(p)
     theta = np.random.default_rng(5).uniform(1, 10, n)
-    cfg = FilterConfig(gamma=2.0, u_max=a_max, dt=dt, dynamics="double_integrator",
-                                                      barrier="braking")
+    cfg = FilterConfig(
+        gamma=2.0, u_max=a_max, dt=dt, dynamics="double_integrator", barrier="braking"
+    )
     flt = SafetyFilter(cfg)
     I, J = pairs.all_pairs(n)
     w = flt.pair_weights(theta, None, I, J)
@@ -101,7 +102,11 @@ def test_double_integrator_crowd_flags_every_infeasible_step():
         nominal = np.clip(2.0 * (move_to_goal(p, goals, 2.0, 2.0) - v), -a_max, a_max)
         res = flt.filter(p, nominal, theta, velocities=v)
         rows = barriers.double_integrator_rows(
-            p, v, w, I, J,
+            p,
+            v,
+            w,
+            I,
+            J,
             barriers.BarrierSpec(cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, dt=dt),
             cull=False,
         )

@@ -83,9 +83,11 @@ def test_rows_keep_the_segment_above_its_bound(s, angle, normal, c, dt, h, x, y,
 
 SETTINGS = [(0.01, 1.0, 1e-3), (0.05, 0.1, 1.0), (0.1, 1.0, 1e3), (0.1, 0.5, 1.0),
             (0.02, 0.7, 1e3), (0.5, 1.0, 1.0), (2.0, 0.5, 1e-3)]  # fmt: skip
-FAMILIES = [("head-on", 2, 840), ("crossing", 2, 840), ("overtaking", 2, 840)] + [
-    ("converging", k, 840) for k in range(3, 9)
-] + [("wall", 2, 840), ("corner", 3, 840), ("circle", 3, 840)]
+FAMILIES = (
+    [("head-on", 2, 840), ("crossing", 2, 840), ("overtaking", 2, 840)]
+    + [("converging", k, 840) for k in range(3, 9)]
+    + [("wall", 2, 840), ("corner", 3, 840), ("circle", 3, 840)]
+)
 
 
 @pytest.mark.parametrize("family, k, E", FAMILIES)
@@ -259,7 +261,8 @@ def test_obstacles_up_to_1e7_in_size_and_position_keep_the_qp_feasible(kind, siz
         p, v, obstacles = at_a_big_obstacle(rng, kind, size, where, r, c, dt)
         caps = obstacles.capsules
         assert seg_obstacle_h(p, v, np.array([r]), np.array([1.0]), dt, caps)[0].min() >= (
-            -1e-6 - rounding)  # built at h = 0
+            -1e-6 - rounding
+        )  # built at h = 0
         res = flt.filter(p, np.zeros((1, 2)), np.ones(1), velocities=v, radii=np.array([r]),
                          u_max=np.array([1.0]), obstacles=obstacles)  # fmt: skip
         assert res.feasible[0], (kind, size, where)

@@ -111,8 +111,12 @@ def test_skrl_trains_on_the_crowd(algorithm):
     trainer = SequentialTrainer(
         env=env,
         agents=agent,
-        cfg={"timesteps": STEPS, "disable_progressbar": True, "close_environment_at_exit": False,
-             "headless": True},
+        cfg={
+            "timesteps": STEPS,
+            "disable_progressbar": True,
+            "close_environment_at_exit": False,
+            "headless": True,
+        },
     )
     trainer.train()
     after = list(agent.models["agent_0"]["value"].parameters())

@@ -19,6 +19,12 @@ def test_ruff_clean():
     assert out.returncode == 0, out.stdout + out.stderr
 
 
+def test_ruff_format_finds_nothing_to_change():
+    ruff = shutil.which("ruff") or str(Path(sys.executable).parent / "ruff")
+    out = subprocess.run([ruff, "format", "--check", str(ROOT)], capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-2000:]
+
+
 def test_the_old_top_level_names_are_gone():
     """One namespace: nothing imports ``wrappers`` or ``training`` as a top-level package (the
     wheel installs neither); they are ``rsvo_env.wrappers`` and ``rsvo_env.training``."""

@@ -17,9 +17,7 @@ from tests.test_batched import check_batch_equals_singles
 CROWD = {"dt": 0.1, "gamma": 10.0}  # gamma dt = 1: the largest step the guarantee allows
 
 
-@given(
-    st.floats(1e-6, 1e3), st.floats(1.001, 1e6), st.floats(-1.0, 1.0, allow_subnormal=False)
-)
+@given(st.floats(1e-6, 1e3), st.floats(1.001, 1e6), st.floats(-1.0, 1.0, allow_subnormal=False))
 def test_the_log_map_and_its_inverse(low, ratio, a):
     m = ThetaAction(low, low * ratio)
     theta = m.theta(np.array(a))

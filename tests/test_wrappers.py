@@ -237,13 +237,13 @@ def test_joint_control_bad_action():
         env.step(a)
 
 
-
 def test_wrappers_configure_the_env_they_wrap_in_place():
     """docs/api.md: a wrapper turns on a stage of the wrapped env's core, so the env itself is
     filtered after it is wrapped."""
     import numpy as np
 
     import rsvo_env
+
     def interventions(env):
         env.reset(seed=0)
         total = 0.0

@@ -54,8 +54,9 @@ def load_model(path: str | Path, overrides: Sequence[str] = ()) -> tuple[Any, di
             cfg = configs.resolve(cfg)
             break
     else:
-        raise ValueError(f"no config.yaml beside {shown(str(path))}: was it written by "
-                         f"rsvo_env.training.train?")
+        raise ValueError(
+            f"no config.yaml beside {shown(str(path))}: was it written by rsvo_env.training.train?"
+        )
     if (path / "learner_group").is_dir():
         from rsvo_env.training.rllib_engine import load_module, module_policy
 
@@ -119,9 +120,7 @@ def evaluate_loaded(
     return result
 
 
-def main(
-    argv: list[str] | None = None, prog: str = "python -m rsvo_env.training.evaluate"
-) -> int:
+def main(argv: list[str] | None = None, prog: str = "python -m rsvo_env.training.evaluate") -> int:
     p = Parser(
         prog=prog,
         description=__doc__.split("\n\n")[0],

@@ -27,9 +27,7 @@ def fit(
             tune.with_resources(trainable, {"cpu": 1}),
             param_space=param_space,
             tune_config=tune_config,
-            run_config=tune.RunConfig(
-                name=name, storage_path=str(Path(out).resolve()), verbose=0
-            ),
+            run_config=tune.RunConfig(name=name, storage_path=str(Path(out).resolve()), verbose=0),
         )
         results = list(tuner.fit())
     finally:

@@ -50,4 +50,3 @@ class RCBFSafetyFilter(BaseParallelWrapper):
         self.safety_filter = SafetyFilter(self.config)
         self.intervention_penalty = intervention_penalty
         base.add_safety_filter(self.safety_filter, intervention_penalty)
-

@@ -94,11 +94,17 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--seed", type=count(0), default=argparse.SUPPRESS,
                     help="seed of the episode (default: 0)")  # fmt: skip
-    ap.add_argument("--dynamics", choices=dynamics.NAMES,
-                    help="the agents' model, in the scenes that take one (default: the scene's)")
-    ap.add_argument("--num-agents", type=count(2), metavar="N",
-                    help="how many agents, in the scenes laid out for any number (default: the "
-                    "scene's)")
+    ap.add_argument(
+        "--dynamics",
+        choices=dynamics.NAMES,
+        help="the agents' model, in the scenes that take one (default: the scene's)",
+    )
+    ap.add_argument(
+        "--num-agents",
+        type=count(2),
+        metavar="N",
+        help="how many agents, in the scenes laid out for any number (default: the scene's)",
+    )
     ap.add_argument("--max-steps", type=count(1), metavar="STEPS",
                     help="the episode's step cap (default: the scene's)")  # fmt: skip
     ap.add_argument("--gif", type=Path, help="write an animated GIF here (.gif)")

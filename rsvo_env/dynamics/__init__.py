@@ -35,5 +35,6 @@ def get(model: str | Dynamics, field: str = "dynamics") -> Dynamics:
         return model
     if isinstance(model, str) and model in MODELS:
         return MODELS[model]
-    raise ValueError(f"{field} = {shown(model)} is unknown; use one of {NAMES} or a Dynamics "
-                     f"instance")
+    raise ValueError(
+        f"{field} = {shown(model)} is unknown; use one of {NAMES} or a Dynamics instance"
+    )

@@ -198,8 +198,11 @@ def _sampled_rows(own, e, sigma, h, other, unit, travel, spare, speed, c, beta, 
         ahead = sigma[k] + nv * travel[i]
         # row 2 at the backup: n.w_beta = nv |w_beta|, and W - |w_beta| = sqrt 2 dt rho
         tau1 = sigma[k] - nv * behind[i] if lead else ahead
-        tau2 = (sigma[k] - nv * spare[i]) + nv * kap[i] * rho[i] if lead else (
-            ahead + K2[i] * nv * w_beta[i])
+        tau2 = (
+            (sigma[k] - nv * spare[i]) + nv * kap[i] * rho[i]
+            if lead
+            else (ahead + K2[i] * nv * w_beta[i])
+        )
         for row in range(2):
             a = a1 if row == 0 else a2[i]
             Ax, Ay = -a * e[k, 0], -a * e[k, 1]

@@ -289,8 +289,9 @@ def check_headings(headings: ArrayLike | None, shape: tuple[int, ...], model: st
     if not np.isfinite(hd).all():
         idx = tuple(int(k) for k in np.argwhere(~np.isfinite(hd))[0])
         where = "".join(f"[{k}]" for k in idx)
-        raise ValueError(f"headings{where} = {shown(float(hd[idx]))} is not finite (agent "
-                         f"{idx[-1]})")
+        raise ValueError(
+            f"headings{where} = {shown(float(hd[idx]))} is not finite (agent {idx[-1]})"
+        )
     return hd
 
 

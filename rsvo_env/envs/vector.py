@@ -90,8 +90,9 @@ class BatchedEnv:
         if action not in ("direct", "residual"):
             raise ValueError(f"action = {shown(action)}; use 'direct' or 'residual'")
         if autoreset_mode not in AUTORESET_MODES:
-            raise ValueError(f"autoreset_mode = {shown(autoreset_mode)}; use one of "
-                             f"{AUTORESET_MODES}")
+            raise ValueError(
+                f"autoreset_mode = {shown(autoreset_mode)}; use one of {AUTORESET_MODES}"
+            )
         self.autoreset_mode = autoreset_mode
         # checked whatever the action mode: a bad value is refused, not ignored
         residual = Residual(

@@ -70,8 +70,9 @@ class FilterConfig:
             except (TypeError, ValueError):
                 ok = False
             if not ok:
-                raise ValueError(f"FilterConfig.{name} = {shown(value)} must be a finite "
-                                 f"number > 0")
+                raise ValueError(
+                    f"FilterConfig.{name} = {shown(value)} must be a finite number > 0"
+                )
 
         # the model (a name or an instance); ``dynamics`` keeps its name, as reported
         model = models.get(self.dynamics, "FilterConfig.dynamics")
@@ -115,8 +116,9 @@ class FilterConfig:
                 f"FilterConfig.barrier = {shown(self.barrier)}; use one of {barriers.BARRIERS}"
             )
         if self.split not in barriers.SPLITS:
-            raise ValueError(f"FilterConfig.split = {shown(self.split)}; use one of "
-                             f"{barriers.SPLITS}")
+            raise ValueError(
+                f"FilterConfig.split = {shown(self.split)}; use one of {barriers.SPLITS}"
+            )
         if self.solver != "exact" and self.solver not in qpsolvers.available_solvers:
             raise ValueError(
                 f"FilterConfig.solver = {shown(self.solver)}; use 'exact' or an installed "

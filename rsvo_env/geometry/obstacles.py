@@ -70,8 +70,9 @@ class Obstacles:
         bad = ~np.isfinite(t) | (t < 0)
         if bad.any():
             k = int(np.argmax(bad))
-            raise ValueError(f"thickness[{k}] = {shown(float(t[k]))} must be finite and >= 0 "
-                             f"(wall {k})")
+            raise ValueError(
+                f"thickness[{k}] = {shown(float(t[k]))} must be finite and >= 0 (wall {k})"
+            )
         caps = np.concatenate(
             [np.c_[c[:, :2], c[:, :2], c[:, 2]], np.c_[w, 0.5 * t]], axis=0
         ).reshape(-1, 5)

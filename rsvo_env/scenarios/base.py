@@ -86,8 +86,13 @@ class Scenario:
     # parameters that must be > 0 and >= 0 (each subclass adds its own)
     positive: ClassVar[tuple[str, ...]] = ("dt", "goal_tolerance", "safety_radius", "gamma", "k",
                                            "theta_max", "u_max")  # fmt: skip
-    nonnegative: ClassVar[tuple[str, ...]] = ("rh_trigger", "rh_trigger_factor",
-                                              "rorca_goal_reach", "rorca_goal_hold", "rh_hold")
+    nonnegative: ClassVar[tuple[str, ...]] = (
+        "rh_trigger",
+        "rh_trigger_factor",
+        "rorca_goal_reach",
+        "rorca_goal_hold",
+        "rh_hold",
+    )
 
     def __init__(self, **kwargs: Any) -> None:
         self.choose_model(kwargs)
@@ -170,9 +175,7 @@ class Scenario:
         """Checks that relate parameters of a scenario to one another (a subclass's own)."""
 
     def _check_theta_range(self, value: Any) -> tuple[float, float]:
-        low_high = check_theta_interval(
-            value, f"{self.name}.theta_range", self.params["theta_max"]
-        )
+        low_high = check_theta_interval(value, f"{self.name}.theta_range", self.params["theta_max"])
         if self.params["theta"] is not None:
             raise ValueError(f"{self.name}: give theta or theta_range, not both")
         return low_high

@@ -71,4 +71,3 @@ def check_scene_filter(scenario: Scenario, flt: SafetyFilter) -> None:
         raise ValueError(f"input bounds per agent are not available for the {model.name} yet")
     if scenario.num_obstacles and type(model).obstacle_rows is Dynamics.obstacle_rows:
         raise ValueError(f"obstacles are not available for the {model.name} yet")
-

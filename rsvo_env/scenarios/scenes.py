@@ -213,8 +213,9 @@ class ObstacleField(Scenario):
         check_count(self.params["num_circles"], "obstacle_field.num_circles", 0)
         lo, hi = self.params["circle_radius"]
         if not 0 < lo <= hi:
-            raise ValueError(f"obstacle_field.circle_radius = {shown((lo, hi))} needs 0 < low "
-                             f"<= high")
+            raise ValueError(
+                f"obstacle_field.circle_radius = {shown((lo, hi))} needs 0 < low <= high"
+            )
 
     @property
     def num_obstacles(self) -> int:

@@ -80,8 +80,9 @@ class Simulator:
             or not isinstance(num_obs_neighbors, (int, np.integer))
             or not 0 <= num_obs_neighbors < n
         ):
-            raise ValueError(f"num_obs_neighbors = {shown(num_obs_neighbors)} must be in [0, "
-                             f"{n - 1}]")
+            raise ValueError(
+                f"num_obs_neighbors = {shown(num_obs_neighbors)} must be in [0, {n - 1}]"
+            )
         check_weighting(weighting, np.ones(n))  # now, not at the first reset
         self.scenario, self.num_envs, self.n = scenario, int(num_envs), n
         self.k = int(num_obs_neighbors)
@@ -123,7 +124,6 @@ class Simulator:
         self._bodies: dict[int, Bodies | None] = {}
         self.metrics = EpisodeMetrics(
             self.num_envs, n, self.dt, self.safety_radius, record_series=record_series
-
         )
         self.limits = observation.limits_for(scenario)
         # every agent's progress clock (rsvo_env.control.stall): the deadlock signal, observed as

@@ -276,7 +276,6 @@ class EpisodeMetrics:
             self.min_distance_series.append(float(self.step_series[0, 0]))
             self.avg_min_distance_series.append(float(self.step_series[0, 1]))
 
-
     def flat(self) -> dict[str, NDArray]:
         """(E,) arrays ``episode_<field>`` of the running episodes (final on their last step)."""
         values = _flat(self.counts, self.min_distance, self.infeasible, self.arrival)
