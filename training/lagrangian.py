@@ -130,10 +130,17 @@ class PPOLagrangian(PPO):
         rollout = ["costs", "cost_values", "cost_advantages", "cost_returns", "_episode_cost"]
         return [*super()._excluded_save_params(), *rollout, "_ended_costs"]
 
+    @property
+    def _cost_policy(self) -> CostActorCriticPolicy:
+        """The policy, as the cost critic's owner (SB3 types it as its base class)."""
+        assert isinstance(self.policy, CostActorCriticPolicy)
+        return self.policy
+
     def _cost_value(self, obs: Any) -> NDArray:
         with th.no_grad():
             tensor = obs_as_tensor(obs, self.device)
-            return self.policy.predict_cost_values(tensor).cpu().numpy().reshape(-1)
+            assert isinstance(tensor, th.Tensor)  # a Box observation, not a dict
+            return self._cost_policy.predict_cost_values(tensor).cpu().numpy().reshape(-1)
 
     def _update_info_buffer(self, infos: list[dict], dones: NDArray | None = None) -> None:
         # SB3 calls this once a step, after the env's step and before the buffer's add: the step's
@@ -157,6 +164,7 @@ class PPOLagrangian(PPO):
     ) -> bool:
         if not super().collect_rollouts(env, callback, rollout_buffer, n_rollout_steps):
             return False
+        assert self._last_episode_starts is not None  # set by the rollout just collected
         last = self._cost_value(self._last_obs), self._last_episode_starts.astype(np.float32)
         self.cost_advantages, self.cost_returns = gae(
             self.costs,
@@ -201,7 +209,7 @@ class PPOLagrangian(PPO):
         for _ in range(self.n_epochs):
             for batch in th.randperm(n, device=self.device).split(self.batch_size):
                 loss = nn.functional.mse_loss(
-                    self.policy.predict_cost_values(obs[batch]).flatten(), target[batch]
+                    self._cost_policy.predict_cost_values(obs[batch]).flatten(), target[batch]
                 )
                 self.policy.optimizer.zero_grad()  # the other parameters keep no gradient:
                 loss.backward()  # Adam leaves them as they are

@@ -204,12 +204,13 @@ class Log:
         self.file = open(out / "progress.csv", "w", newline="")  # noqa: SIM115
         self.writer = csv.DictWriter(self.file, fieldnames=self.FIELDS)
         self.writer.writeheader()
+        self.tb: Any = None  # TensorBoard's writer where it is installed
         try:
             from torch.utils.tensorboard import SummaryWriter
 
             self.tb = SummaryWriter(str(out))
         except ImportError:
-            self.tb = None
+            pass
 
     def write(self, row: dict[str, Any]) -> None:
         self.writer.writerow(row)

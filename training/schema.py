@@ -161,7 +161,8 @@ def _by_default(default: Any) -> Check | None:
 
 def _signature_fields(cls: type, skip: set[str]) -> dict[str, Check]:
     fields: dict[str, Check] = {}
-    for name, param in inspect.signature(cls.__init__).parameters.items():
+    init = getattr(cls, "__init__")  # noqa: B009  (the class's own, not an instance's)
+    for name, param in inspect.signature(init).parameters.items():
         if name in skip or param.kind in (param.VAR_POSITIONAL, param.VAR_KEYWORD):
             continue
         fields[name] = _by_default(param.default) or (lambda value, where: value)

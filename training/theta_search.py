@@ -48,7 +48,7 @@ def scenario_kwargs(scenario: str, assignments: list[str]) -> dict[str, Any]:
 def measure(theta: np.ndarray, params: dict[str, Any]) -> dict[str, Any]:
     """One assignment (N,) on the search's seeds: the objective and the means of every field."""
     stats = evaluate(theta[None], params["seeds"], params["scenario"], **params["kwargs"])
-    out = {"completion": float(objective(stats, params["cap"])[0])}
+    out: dict[str, float | None] = {"completion": float(objective(stats, params["cap"])[0])}
     for key in STATS:
         out[key] = float(np.nanmean(stats[key])) if np.isfinite(stats[key]).any() else None
     return out

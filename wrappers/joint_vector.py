@@ -47,6 +47,7 @@ class JointVectorEnv(OverBatched):
             np.tile(single.low, N), np.tile(single.high, N), dtype=np.float32
         )
         width = self.env.single_action_space.shape[0]
+        self.joint_width = width * N  # one env's joint action: every agent's, in agent order
         self.single_action_space = gymnasium.spaces.Box(-1.0, 1.0, (width * N,), dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -64,7 +65,7 @@ class JointVectorEnv(OverBatched):
         if a.shape != self.action_space.shape:
             raise ValueError(
                 f"actions has shape {a.shape}, expected {self.action_space.shape} (one joint "
-                f"action of {self.single_action_space.shape[0]} values for each of "
+                f"action of {self.joint_width} values for each of "
                 f"{self.num_envs} envs)"
             )
         E, N = self.num_envs, self.env.num_agents

@@ -68,7 +68,7 @@ class SB3VecEnv(VecEnv):
 
     def step_async(self, actions: NDArray) -> None:
         self._actions = np.asarray(actions).reshape(
-            self.venv.num_envs, self.agents_per_env, *self.action_space.shape
+            self.venv.num_envs, self.agents_per_env, *(self.action_space.shape or ())
         )
 
     def step_wait(self) -> tuple[NDArray, NDArray, NDArray, list[dict]]:

@@ -54,6 +54,6 @@ def run(
     out["weighting"], out["filtered"] = weighting, bool(safety_filter)
     if gif:
         fps = max(1, int(round(1.0 / (base.dt * gif_every))))
-        out["gif"] = save_gif(frames, gif, fps=min(fps, 50))
+        out["gif"] = save_gif([f for f in frames if f is not None], gif, fps=min(fps, 50))
     env.close()
     return out

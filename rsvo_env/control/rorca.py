@@ -197,12 +197,12 @@ def rorca_velocities(
     # the goal rule reads its own clock where given (and goals are), else the arrival cap's
     own = goal_held is not None and goals is not None
     goal_hold = np.ascontiguousarray(goal_held, np.bool_).reshape(M) if own else hold
-    rules = (flags.reshape(M), hold, tied, float(reach), goal_hold)
+    compiled = (flags.reshape(M), hold, tied, float(reach), goal_hold)
     if n > sizes.DENSE_MAX_AGENTS:  # a grid scan for each agent's K nearest, ORCA's way
         if omega is None and any(callable(m) for m in modes):
             omega = rorca_dense.matrices(theta, modes)
-        out = rorca_grid.stage(n, motion, theta, symmetric_envs(modes), omega, rules, settings)
+        out = rorca_grid.stage(n, motion, theta, symmetric_envs(modes), omega, compiled, settings)
     else:  # every other agent of the env within neighbor_dist, its weights from the matrices
         W = rorca_dense.matrices(theta, modes) if omega is None else omega
-        out = rorca_dense.stage(n, motion, W, rules, settings)
+        out = rorca_dense.stage(n, motion, W, compiled, settings)
     return out.reshape(E, n, 2)

@@ -272,7 +272,9 @@ def kept_rows(M: int, rows: tuple, keep: NDArray | None, trust: tuple | None, pa
         parts.append(trust)
     owner_k, A_k, b_k, other_k, h_k = (np.concatenate(c) for c in zip(*parts, strict=True))
     stored = _store(M, owner_k, A_k, b_k, other_k, h_k)
-    examined = len(keep) if keep is not None else examined
+    if keep is not None:
+        examined = len(keep)
+    assert examined is not None  # given with the kept rows (keep None)
     n_culled = examined + (4 * M if trust is not None else 0) - len(b_k)
     return Rows(**stored, pair_h=pair_h, n_pairs=n_pairs, n_culled=n_culled)
 

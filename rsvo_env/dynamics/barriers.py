@@ -286,6 +286,7 @@ def double_integrator_rows(
         )
         c = 1.0
         if len(stuck):
+            assert dt is not None  # braking_rhs finds stuck pairs in sampled time only
             keep_sign = stuck
             tangential = _tangential_rows(keep_sign, dp, dv, dist, q, omega_pairs[:, 0], dt)
     else:

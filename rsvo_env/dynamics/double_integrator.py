@@ -173,7 +173,7 @@ class DoubleIntegrator(Dynamics):
                 )
         return double_integrator_obstacle_rows(cfg, positions, velocities, bodies, capsules, n)
 
-    def culling_radii(self, cfg, omega_floor, velocities, bodies):
+    def culling_radii(self, cfg, omega_floor, velocities, bodies, speed=None):
         from rsvo_env.dynamics.double_integrator_radii import WorstPair, double_integrator_radii
 
         if cfg.barrier in BACKED:

@@ -241,10 +241,16 @@ class Dynamics:
         return with_obstacles(rows, *obstacle_rows), obstacle_h
 
     def culling_radii(
-        self, cfg: FilterSettings, omega_floor: NDArray, velocities: NDArray | None, bodies: Bodies
+        self,
+        cfg: FilterSettings,
+        omega_floor: NDArray,
+        velocities: NDArray | None,
+        bodies: Bodies,
+        speed: NDArray | None = None,
     ) -> NDArray[np.float64]:
         """Per agent and weight floor (E, N, K), the distance beyond which none of its rows
-        with a positive weight can bind in the current state."""
+        with a positive weight can bind in the current state; ``speed``: each agent's nominal
+        speed (E, N), for the models that search by the nominal (``nominal_disk``)."""
         raise NotImplementedError
 
     def search_radius(self, cfg: FilterSettings, omega_min: float, bodies: Bodies) -> float:

@@ -136,6 +136,7 @@ class Unicycle(Dynamics):
         # c_b = (v, l w) with v >= 0: the heading turns toward c, so v(t) rises toward |c| and
         # |w(t)| only falls; |c_b| <= v_max and |l w| <= l w_max then keep every input in its
         # bounds for the whole step. Reversing (v < 0) could swing w past w_max on the way.
+        assert cfg.lookahead is not None and cfg.w_max is not None  # the unicycle's config
         b = cfg.lookahead * cfg.w_max
         v_hi = float(np.sqrt(hi[0] ** 2 - b * b))
         return np.array([0.0, -b]), np.array([v_hi, b])
@@ -143,6 +144,7 @@ class Unicycle(Dynamics):
     def agent_boxes(self, cfg, u_max):
         """Each agent's body-frame box from its own forward-speed limit ``v_max,i``:
         ``0 <= v <= sqrt(v_max,i^2 - (l w_max)^2)``, ``|l w| <= l w_max`` (:meth:`box`)."""
+        assert cfg.lookahead is not None and cfg.w_max is not None  # the unicycle's config
         b = cfg.lookahead * cfg.w_max
         slow = u_max <= b
         if slow.any():

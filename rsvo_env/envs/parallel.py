@@ -69,7 +69,7 @@ class RSVOParallelEnv(ParallelEnv):
     episode's metrics are :attr:`episode_metrics`.
     """
 
-    metadata = {
+    metadata: dict[str, Any] = {
         "name": "rsvo_v0",
         "render_modes": ["human", "rgb_array"],
         "render_fps": 50,
@@ -311,9 +311,11 @@ class RSVOParallelEnv(ParallelEnv):
 
     @property
     def np_random(self) -> np.random.Generator:
-        if self.sim.rngs[0] is None:
-            self.sim.rngs[0], _ = seeding.np_random()
-        return self.sim.rngs[0]
+        rng = self.sim.rngs[0]
+        if rng is None:
+            rng, _ = seeding.np_random()
+            self.sim.rngs[0] = rng
+        return rng
 
 
 class CheckedActionsAEC(BaseWrapper):

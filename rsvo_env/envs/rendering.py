@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -135,12 +135,12 @@ class Renderer:
         # short lines, so that narrow arenas (the ramp merge) show them whole
         top = ([] if time is None else [f"t = {time:.2f} s"]) + self.caption.split(", ")
         for k, text in enumerate(t for t in top if t):
-            line = self.font.render(text, True, (40, 40, 40))
-            surf.blit(line, (6, 4 + k * self.font.get_linesize()))
+            label = self.font.render(text, True, (40, 40, 40))
+            surf.blit(label, (6, 4 + k * self.font.get_linesize()))
         key = ["x: goal", "blue: altruist", "red: egoist (small theta)"]
         for k, text in enumerate(key):
-            line = self.font.render(text, True, (90, 90, 90))
-            surf.blit(line, (6, self.height - (k + 1) * self.font.get_linesize() - 4))
+            label = self.font.render(text, True, (90, 90, 90))
+            surf.blit(label, (6, self.height - (k + 1) * self.font.get_linesize() - 4))
 
     def _capsule(self, cap: NDArray) -> None:
         """One obstacle: a disc (a circle) or a thick segment with round ends (a wall)."""
@@ -162,7 +162,8 @@ class Renderer:
         self.pygame.event.pump()
         self.window.blit(self.surface, (0, 0))
         self.pygame.display.flip()
-        self.clock.tick(self.fps)
+        if self.clock is not None:
+            self.clock.tick(self.fps)
 
     def close(self) -> None:
         if self.window is not None:
@@ -181,7 +182,7 @@ def save_gif(frames: Sequence[NDArray[np.uint8]], path: str | Path, fps: int = 2
     return path
 
 
-MARK_STYLES = (":", "-.", "--")
+MARK_STYLES: tuple[Literal[":", "-.", "--"], ...] = (":", "-.", "--")
 OBSTACLE_GREY = (0.55, 0.55, 0.55)
 
 
@@ -193,7 +194,7 @@ def _capsule_patch(ax: Any, cap: NDArray) -> None:
 
     a, b, r = np.asarray(cap[:2]), np.asarray(cap[2:4]), float(cap[4])
     for end in (a, b):
-        ax.add_patch(plt.Circle(end, r, color=OBSTACLE_GREY, lw=0))
+        ax.add_patch(plt.Circle((float(end[0]), float(end[1])), r, color=OBSTACLE_GREY, lw=0))
     d = b - a
     if np.hypot(*d) > 0:
         n = np.array([-d[1], d[0]]) / np.hypot(*d) * r

@@ -178,6 +178,7 @@ class BatchedEnv:
         pending = self._pending
         if pending.any():
             envs = np.flatnonzero(pending)
+            assert self._reset_args is not None  # set by reset, which every step follows
             theta, weighting = self._reset_args
             self.sim.reset(envs, [None] * len(envs), theta, weighting)
             obs[envs] = self.sim.observe(envs)

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import qpsolvers
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env import dynamics as models
 from rsvo_env.dynamics import barriers
@@ -17,7 +17,7 @@ from rsvo_env.util.validation import real_array, shown
 DYNAMICS = models.NAMES
 
 
-def _box_bound(value: object, name: str) -> NDArray[np.float64]:
+def _box_bound(value: ArrayLike, name: str) -> NDArray[np.float64]:
     """A bound of the input box, one number or one per component, as (2,) floats; strings,
     bools and complex numbers are refused (numpy would read ``"3"`` as 3.0 and ``True`` as 1.0).
     Finiteness and order are checked by the caller, on both bounds."""

@@ -81,7 +81,10 @@ def _scratch(n):
     return np.empty((m, 3)), np.empty(m, dtype=np.bool_)
 
 
-def _outputs(E: int, n: int) -> tuple[NDArray, ...]:
+Outputs = tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]
+
+
+def _outputs(E: int, n: int) -> Outputs:
     """The arrays :func:`_serial` and :func:`_parallel` fill: allocated here, as a compiled
     function's returned arrays cost more each to hand back to Python (measured at 6 agents)."""
     return (
@@ -131,7 +134,7 @@ def filter_dense(
     radii: NDArray[np.float64],
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
-) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
+) -> Outputs:
     """Safe single-integrator controls of E envs x N agents, every pair of an env examined.
 
     positions, nominal (E, N, 2); omega (E, N, N); radii (E, N) body radii (a pair is safe at

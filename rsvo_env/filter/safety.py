@@ -30,7 +30,9 @@ from rsvo_env.geometry import pairs
 from rsvo_env.geometry.bodies import Bodies
 from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.qp import solve as solvers
+from rsvo_env.qp.rows import Rows
 from rsvo_env.responsibility.svo import (
+    Weighting,
     min_pair_weight,
     smallest_weight,
     validate_weight_matrix,
@@ -108,7 +110,7 @@ class SafetyFilter:
         omega: NDArray | None,
         I: NDArray,
         J: NDArray,
-        weighting: Sequence[str] | None = None,
+        weighting: Sequence[Weighting] | None = None,
     ) -> NDArray[np.float64]:
         """(P, 2) weights of each pair (flat agent indices): omega_IJ and omega_JI (Thm. 1),
         summing to 1. ``theta`` is (N,) or (E, N), ``omega`` (N, N) or (E, N, N);
@@ -184,16 +186,23 @@ class SafetyFilter:
                 raise ValueError(f"velocities are required for the {cfg.dynamics}")
             vel = check_vectors(velocities, "velocities", n, lead=lead)
         caps = check_obstacles(obstacles, lead)
-        own = {"headings": headings, "holonomic": holonomic}
+        own: dict[str, Any] = {"headings": headings, "holonomic": holonomic}
         bodies, own = cfg.model.filter_state(cfg, lead, n, single, bodies, own)
-        kw = {"bodies": bodies, "obstacles": caps, **own}
+        kw: dict[str, Any] = {"bodies": bodies, "obstacles": caps, **own}
         if single:
             pos, nom, th = pos[None], nom[None], th[None]
             vel = None if vel is None else vel[None]
         res = self.apply(pos, nom, th, vel, W, **kw)
         if res.rows is None:  # the compiled pass keeps none: built if asked for, from a copy
-            args = tuple(None if a is None else a.copy() for a in (pos, nom, th, vel, W))
-            res.rows_later = lambda: self.apply(*args, with_rows=True, **kw).rows
+            p, u, t = pos.copy(), nom.copy(), th.copy()
+            v, w = (None if a is None else a.copy() for a in (vel, W))
+
+            def rows_later() -> Rows:
+                rows = self.apply(p, u, t, v, w, with_rows=True, **kw).rows
+                assert rows is not None  # with_rows keeps them
+                return rows
+
+            res.rows_later = rows_later
         return res.squeeze() if single else res
 
     def apply(
@@ -205,7 +214,7 @@ class SafetyFilter:
         omega: NDArray[np.float64] | None = None,
         with_rows: bool = False,
         known: Known | None = None,
-        weighting: Sequence[str] | None = None,
+        weighting: Sequence[Weighting] | None = None,
         bodies: Bodies | None = None,
         obstacles: NDArray | None = None,
         headings: NDArray | None = None,
@@ -269,13 +278,14 @@ class SafetyFilter:
             # against egoists spans many neighbours); with one group of scores its tests
             # cost more than the pairs they drop (measured: docs/math.md)
             if cfg.model.nominal_disk and floor[0].shape[-1] > 1:
-                if self._scaled_floor[0] is not floor:  # kept while the floor is
-                    self._scaled_floor = (floor, floor[0] * cfg.gamma)
+                kept, scaled = self._scaled_floor
+                if kept is not floor or scaled is None:  # kept while the floor is
+                    scaled = floor[0] * cfg.gamma
+                    self._scaled_floor = (floor, scaled)
                 likely = self._exempt if self._exempt.shape == (E * n,) else None
                 I, J, rows, obstacle_h, reach, self._exempt = projection_disk.search(
-                    cfg, positions, disk_nominal, floor, self._scaled_floor[1], radii, bodies,
-                    rows_of, likely,
-                )  # fmt: skip
+                    cfg, positions, disk_nominal, floor, scaled, radii, bodies, rows_of, likely
+                )
             else:
                 I, J = pairs.pairs_within_agent_radii(positions, radii, floor)
         else:
@@ -332,7 +342,7 @@ class SafetyFilter:
             return pairs.weight_floor(omega)
         return self._of_scores("floor", theta, pairs.floor_of)
 
-    def _matrix(self, theta: NDArray, weighting: Sequence[str] | None) -> NDArray:
+    def _matrix(self, theta: NDArray, weighting: Sequence[Weighting] | None) -> NDArray:
         """(E, N, N) weight matrices of ``theta`` (E, N): each env's named ``weighting``, or
         the configured one. A caller steps with the same scores step after step, so the last
         matrices of a named configured weighting are kept (a callable is asked every time)."""

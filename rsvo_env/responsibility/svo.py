@@ -24,7 +24,8 @@ Weighting = str | Callable[[NDArray[np.float64]], ArrayLike]
 def _pair(theta_i: ArrayLike, theta_j: ArrayLike) -> tuple[NDArray, NDArray]:
     ti = check_theta(theta_i, name="theta_i", allow_scalar=True)
     tj = check_theta(theta_j, name="theta_j", allow_scalar=True)
-    return np.broadcast_arrays(ti, tj)
+    wide_i, wide_j = np.broadcast_arrays(ti, tj)
+    return wide_i, wide_j
 
 
 def r_svo(theta_i: ArrayLike, theta_j: ArrayLike) -> NDArray[np.float64] | float:

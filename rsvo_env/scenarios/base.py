@@ -77,7 +77,7 @@ class Scenario:
     """Base class: parameters, initial state, nominal controller, arena."""
 
     name: ClassVar[str] = ""
-    dynamics: ClassVar[str] = "single_integrator"
+    dynamics: str = "single_integrator"  # the class's model; an instance may take another
     defaults: ClassVar[dict[str, Any]] = {}
     # the models a scene takes by ``dynamics=`` (none: only its own, ``dynamics``)
     models: ClassVar[tuple[str, ...]] = ()

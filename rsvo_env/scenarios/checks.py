@@ -48,7 +48,7 @@ def check_scene(scenario: Scenario, starts: NDArray, goals: NDArray, capsules: N
     for what, at, margin in (("start", points, grown), ("goal", goals, reach)):
         c = nearest_points(at, capsules)
         gap = np.linalg.norm(at[:, None, :] - c, axis=-1) - capsules[:, 4] - margin[:, None]
-        i, o = np.unravel_index(int(np.argmin(gap)), gap.shape)
+        i, o = (int(k) for k in np.unravel_index(int(np.argmin(gap)), gap.shape))
         if gap[i, o] < 0:
             raise ValueError(
                 f"the {what} of agent {i}, {at[i].tolist()}, is inside obstacle {o} "

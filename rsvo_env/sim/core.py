@@ -88,9 +88,10 @@ class Simulator:
         self.k = int(num_obs_neighbors)
         self.frame, self.weighting = frame, weighting
         r = {**REWARDS, **(rewards or {})}
-        self.reward_weights = tuple(
+        progress, time, goal = (
             check_real(r[name], name) for name in ("reward_progress", "reward_time", "reward_goal")
         )
+        self.reward_weights = (progress, time, goal)
         self.reward_team = check_real(r["reward_team"], "reward_team")
         if not 0.0 <= self.reward_team <= 1.0:
             raise ValueError(f"reward_team = {shown(r['reward_team'])} must be in [0, 1]")
@@ -184,7 +185,7 @@ class Simulator:
 
     def reset(
         self,
-        envs: Sequence[int],
+        envs: Sequence[int] | NDArray[np.integer],
         seeds: Sequence[int | None],
         theta: NDArray | None = None,
         weighting: Weighting | None = None,
@@ -370,13 +371,14 @@ class Simulator:
         s = self.state
         # all envs: the arrays themselves, as a view of each costs more than it seems at a few
         # agents (this runs every step)
+        fields: tuple[NDArray, ...]
         fields = (s.positions, s.velocities, s.goals, s.theta, s.neighbors, s.frame_angle)
         pick: NDArray[np.int64] | slice = slice(None)
         if envs is not None:
             pick = envs
             fields = tuple(a[envs] for a in fields)
-        x, v, goals, theta, nb, frame = fields
-        frame = frame if self.frame == "goal" else None
+        x, v, goals, theta, nb, angle = fields
+        frame = angle if self.frame == "goal" else None
         omega, by_index = self.weights.neighbors(s.theta, s.weighting, nb, envs)
         obs = observation.observe(
             x,

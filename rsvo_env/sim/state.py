@@ -41,13 +41,13 @@ class State:
     weighting: list[Weighting]
     # (E, O, 5) each env's obstacles as capsules (rsvo_env.geometry.obstacles), O = 0 without
     obstacles: NDArray[np.float64]
-    # (E, N) rsvo_env.geometry.clearance.contact where bodies differ or obstacles stand, else None
-    contact: NDArray[np.float64] | None = None
-    # (E, N) headings (radians), for a model that has them (the unicycle)
-    headings: NDArray[np.float64] | None = None
+    # (E, N) headings (radians), read by a model that has them (the unicycle)
+    headings: NDArray[np.float64]
     # (E, N, 2) each steered point's velocity over the last step, where a model steers points
     # other than its positions (the unicycle's look-ahead points, ``Dynamics.steered``)
-    steered_velocities: NDArray[np.float64] | None = None
+    steered_velocities: NDArray[np.float64]
+    # (E, N) rsvo_env.geometry.clearance.contact where bodies differ or obstacles stand, else None
+    contact: NDArray[np.float64] | None = None
     # (E, N) steps since each agent last came closer to its goal (the core's progress clock,
     # rsvo_env.control.stall), a copy per step; R-ORCA reads it
     # (rsvo_env.control.rorca.HOLD_SECONDS)

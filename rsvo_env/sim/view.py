@@ -23,7 +23,7 @@ class SimulatorView(Protocol):
     k: int  # observed neighbours
     safety_radius: float
     max_steps: int
-    reward_weights: tuple[float, ...]
+    reward_weights: tuple[float, float, float]  # progress, time, goal
     weighting: Weighting  # every episode's default
     theta_action: ThetaAction | None
     radii: NDArray  # (N,) body radii

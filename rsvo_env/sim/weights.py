@@ -42,7 +42,9 @@ class Weights:
         self.version = 0
         self._floor: tuple[int, Floor] | None = None
 
-    def update(self, envs: Sequence[int], theta: NDArray, modes: Sequence[Weighting]) -> None:
+    def update(
+        self, envs: Sequence[int] | NDArray[np.integer], theta: NDArray, modes: Sequence[Weighting]
+    ) -> None:
         """Envs ``envs`` now have scores ``theta[envs]`` and weighting ``modes[e]`` (the same
         mode for all of them); ``theta`` (E, N) and ``modes`` are the core's, whole."""
         idx = np.asarray(envs, dtype=np.int64)

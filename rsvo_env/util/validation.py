@@ -182,6 +182,7 @@ def check_action_dict(
             )
         missing = [a for a in agents if a not in actions]
         raise ValueError(f"no action given for agent {shown(missing[0])}")
+    out: NDArray | None
     try:
         out = np.array(values)
     except (TypeError, ValueError):
@@ -197,6 +198,7 @@ def check_action_dict(
     ):
         for agent in agents:
             check_action(actions[agent], agent, shape)
+    assert out is not None  # else check_action refused an agent's action
     return out.astype(np.float64, copy=False)
 
 
@@ -208,13 +210,12 @@ def check_count(value: int, name: str, least: int) -> int:
     return int(value)
 
 
-def check_seed(seed: int | None, name: str = "seed") -> int | None:
+def check_seed(seed: object, name: str = "seed") -> int | None:
     """None or an integer >= 0 (not a bool, a float such as 1.5 or 2.0, or a string), as
     Gymnasium's seeding takes it."""
     if seed is None:
         return None
-    integer = isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_))
-    if not integer or seed < 0:
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, (bool, np.bool_)) or seed < 0:
         raise ValueError(f"{name} = {shown(seed)} must be None or an integer >= 0")
     return int(seed)
 

@@ -9,7 +9,7 @@ from typing import Any
 from rsvo_env.scenarios import COMMON_DEFAULTS, SCENARIOS
 
 # The paper's own numbers, for comparison (circular game: onset / resolved / completed steps).
-PAPER = {
+PAPER: dict[str, Any] = {
     "sym": (140, 390, 620),
     "asym": (142, 275, 415),
     "resolution_gain": 0.468,

@@ -23,8 +23,11 @@ def gains(sym: dict, asym: dict) -> tuple[float | None, float | None]:
     """Resolution and completion gains of a run against the symmetric one (None if unfinished)."""
     o_s, r_s, c_s = steps_of(sym)
     o_a, r_a, c_a = steps_of(asym)
-    res = resolution_gain(o_s, r_s, o_a, r_a) if None not in (o_s, r_s, o_a, r_a) else None
-    comp = completion_gain(c_s, c_a) if None not in (c_s, c_a) else None
+    res = comp = None
+    if o_s is not None and r_s is not None and o_a is not None and r_a is not None:
+        res = resolution_gain(o_s, r_s, o_a, r_a)
+    if c_s is not None and c_a is not None:
+        comp = completion_gain(c_s, c_a)
     return res, comp
 
 

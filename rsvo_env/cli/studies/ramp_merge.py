@@ -39,7 +39,9 @@ def study(plan: Plan, progress: Callable) -> dict[str, Any]:
     distance, the worst minimum distance, infeasible agent-steps; the default-setting detail."""
     p = defaults("ramp_merge")
     merge_y, safe = p["merge_point"][1], p["safety_radius"]
-    summary, detail, figure_runs = {}, [], {}
+    summary: dict[Any, Any] = {}
+    detail: list[Any] = []
+    figure_runs: dict[tuple[str, str], Any] = {}
     for split in SPLITS:
         for barrier in BARRIERS:
             agg = summary.setdefault(
