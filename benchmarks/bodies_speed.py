@@ -73,8 +73,9 @@ def main() -> None:
     args = parser.parse_args()
     sizes = (2000,) if args.quick else (1000, 10000)
     si = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=2.0, u_max=3.0, dt=0.05))
-    uni = SafetyFilter(FilterConfig(dynamics="unicycle", lookahead=0.2, w_max=2.0, u_max=3.0,
-                                    gamma=10.0, dt=0.05))  # fmt: skip
+    uni = SafetyFilter(
+        FilterConfig(dynamics="unicycle", lookahead=0.2, w_max=2.0, u_max=3.0, gamma=10.0, dt=0.05)
+    )
     lines = [
         "# Bodies of their own size and the unicycle: cost ratios",
         "",

@@ -42,8 +42,7 @@ def worker(workload: str, seconds: float) -> None:
     from rsvo_env.envs.vector import BatchedEnv
 
     e, n = WORKLOADS[workload]
-    env = BatchedEnv("crowd", num_envs=e, num_agents=n, safety_filter=True,
-                     nominal="move_to_goal")  # fmt: skip
+    env = BatchedEnv("crowd", num_envs=e, num_agents=n, safety_filter=True, nominal="move_to_goal")
     env.reset(seed=0)
     for _ in range(20):
         env.step(env.nominal_actions())
@@ -93,9 +92,14 @@ def kernel_threshold(sizes=(64, 128, 256, 512, 1024, 4096), repeats: int = 200) 
     keep, threads.PARALLEL_THRESHOLD = threads.PARALLEL_THRESHOLD, 0
     try:
         for n in sizes:
-            qps = (rng.normal(size=(n, 2)), rng.normal(size=(n * 8, 2)),
-                   rng.uniform(0.1, 1.0, n * 8), np.arange(0, 8 * n + 1, 8, dtype=np.int64),
-                   -box, box)  # fmt: skip
+            qps = (
+                rng.normal(size=(n, 2)),
+                rng.normal(size=(n * 8, 2)),
+                rng.uniform(0.1, 1.0, n * 8),
+                np.arange(0, 8 * n + 1, 8, dtype=np.int64),
+                -box,
+                box,
+            )
             times = {}
             for k in (1, CORES, 1, CORES):  # alternating, the second of each kept
                 with threads.using(k):

@@ -37,8 +37,9 @@ def states(n: int, spread: bool, steps: int) -> tuple[SafetyFilter, list, np.nda
     x, _, goals = sc.initial_state(np.random.default_rng(0))
     p = sc.params
     theta = np.random.default_rng(1).uniform(1, 10, n) if spread else np.ones(n)
-    flt = SafetyFilter(FilterConfig(gamma=p["gamma"], safety_radius=p["safety_radius"],
-                                    u_max=p["u_max"], dt=DT))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(gamma=p["gamma"], safety_radius=p["safety_radius"], u_max=p["u_max"], dt=DT)
+    )
     out = []
     for _ in range(steps):
         u = move_to_goal(x, goals, p["k"], p["u_max"])
@@ -89,21 +90,23 @@ def main() -> None:
             cells += [f"{t_dense * per:.2f}", f"{t_general * per:.2f}", f"{ratio:.2f}"]
         rows.append(f"| {n} | " + " | ".join(cells) + " |")
         print(rows[-1], flush=True)
-    text = "\n".join([
-        "# The compiled all-pairs filter pass against the general path",
-        "",
-        f"Written by `python benchmarks/dense_filter_speed.py` ({platform.machine()}, one "
-        f"thread, Python {platform.python_version()}). Microseconds per agent per filtered "
-        f"step of the `crowd` scenario (40 steps, the best of {args.repeats} alternating "
-        "blocks); both paths give the same actions bit for bit. The filter takes the dense "
-        f"pass up to `solvers.dense.MAX_AGENTS` = {dense.MAX_AGENTS} agents an env.",
-        "",
-        "| N | dense, theta equal [µs] | general [µs] | dense / general "
-        "| dense, theta 1..10 [µs] | general [µs] | dense / general |",
-        "|---|---|---|---|---|---|---|",
-        *rows,
-        "",
-    ])  # fmt: skip
+    text = "\n".join(
+        [
+            "# The compiled all-pairs filter pass against the general path",
+            "",
+            f"Written by `python benchmarks/dense_filter_speed.py` ({platform.machine()}, one "
+            f"thread, Python {platform.python_version()}). Microseconds per agent per filtered "
+            f"step of the `crowd` scenario (40 steps, the best of {args.repeats} alternating "
+            "blocks); both paths give the same actions bit for bit. The filter takes the dense "
+            f"pass up to `solvers.dense.MAX_AGENTS` = {dense.MAX_AGENTS} agents an env.",
+            "",
+            "| N | dense, theta equal [µs] | general [µs] | dense / general "
+            "| dense, theta 1..10 [µs] | general [µs] | dense / general |",
+            "|---|---|---|---|---|---|---|",
+            *rows,
+            "",
+        ]
+    )
     out = ROOT / "benchmarks" / "results" / "dense_filter_speed.md"
     out.write_text(text)
     print(f"wrote {out}")

@@ -50,8 +50,14 @@ SAFETY = [
 
 
 def config(dt: float, gamma_dt: float, scale: float, barrier: str = "backup") -> FilterConfig:
-    return FilterConfig(gamma=gamma_dt / dt, safety_radius=scale, u_max=3.0 * scale, dt=dt,
-                        dynamics="double_integrator", barrier=barrier)  # fmt: skip
+    return FilterConfig(
+        gamma=gamma_dt / dt,
+        safety_radius=scale,
+        u_max=3.0 * scale,
+        dt=dt,
+        dynamics="double_integrator",
+        barrier=barrier,
+    )
 
 
 def safety(n, dt, gamma_dt, scale, speed, steps, seed):
@@ -60,11 +66,29 @@ def safety(n, dt, gamma_dt, scale, speed, steps, seed):
     I, J = np.triu_indices(n, 1)
     v = into_safe_set(p, v, radii, a, dt, I, J)
     worst, _, infeasible, *_ = drive(
-        SafetyFilter(config(dt, gamma_dt, scale)), p, v, goals, radii, a, theta, dt, steps,
-        2.0 * scale, I, J,
-    )  # fmt: skip
-    return {"n": n, "dt": dt, "gamma_dt": gamma_dt, "scale": scale, "speed": speed,
-            "steps": steps, "worst": worst, "infeasible": infeasible}  # fmt: skip
+        SafetyFilter(config(dt, gamma_dt, scale)),
+        p,
+        v,
+        goals,
+        radii,
+        a,
+        theta,
+        dt,
+        steps,
+        2.0 * scale,
+        I,
+        J,
+    )
+    return {
+        "n": n,
+        "dt": dt,
+        "gamma_dt": gamma_dt,
+        "scale": scale,
+        "speed": speed,
+        "steps": steps,
+        "worst": worst,
+        "infeasible": infeasible,
+    }
 
 
 def motion(n, barrier, steps, seed, dt=0.05, gamma_dt=0.1):
@@ -86,10 +110,16 @@ def motion(n, barrier, steps, seed, dt=0.05, gamma_dt=0.1):
         if (arrived >= 0).all():
             break
     done = np.sort(arrived[arrived >= 0])
-    return {"n": n, "barrier": barrier, "share": float((arrived >= 0).mean()),
-            "t90": int(done[int(np.ceil(0.9 * n)) - 1]) if len(done) >= 0.9 * n else None,
-            "t100": int(done[-1]) if len(done) == n else None, "closest": closest,
-            "infeasible": infeasible, "agent_steps": n * (k + 1)}  # fmt: skip
+    return {
+        "n": n,
+        "barrier": barrier,
+        "share": float((arrived >= 0).mean()),
+        "t90": int(done[int(np.ceil(0.9 * n)) - 1]) if len(done) >= 0.9 * n else None,
+        "t100": int(done[-1]) if len(done) == n else None,
+        "closest": closest,
+        "infeasible": infeasible,
+        "agent_steps": n * (k + 1),
+    }
 
 
 def ramp_merge():
@@ -99,9 +129,16 @@ def ramp_merge():
         for case, theta in CASES.items():
             out = run("ramp_merge", theta=theta, barrier=barrier, seed=0)
             t = [first_step(out["trajectory"], i, merge_y) for i in range(2)]
-            rows.append({"barrier": barrier, "case": case, "first": first_through(t),
-                         "t": t, "gap": out["min_distance"],
-                         "infeasible": out["n_infeasible"]})  # fmt: skip
+            rows.append(
+                {
+                    "barrier": barrier,
+                    "case": case,
+                    "first": first_through(t),
+                    "t": t,
+                    "gap": out["min_distance"],
+                    "infeasible": out["n_infeasible"],
+                }
+            )
             print(rows[-1], flush=True)
     return rows
 
@@ -182,8 +219,11 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="N = 100 only, 300 steps")
     ap.add_argument("--out", type=Path, default=RESULTS / "double_integrator.md")
-    ap.add_argument("--ramp-merge-only", action="store_true",
-                    help="rerun section 3 alone and replace it in --out")  # fmt: skip
+    ap.add_argument(
+        "--ramp-merge-only",
+        action="store_true",
+        help="rerun section 3 alone and replace it in --out",
+    )
     args = ap.parse_args(argv)
     if args.ramp_merge_only:
         text = args.out.read_text()

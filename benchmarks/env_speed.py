@@ -66,9 +66,14 @@ def vmas_navigation(n: int, e: int) -> tuple[Callable, int]:
     # default); grow s with sqrt(N) from its 16-agent default so that 64 agents fit too.
     s = max(1.0, float(np.sqrt(n / 16)))
     env = vmas.make_env(
-        "navigation", num_envs=e, device="cpu", n_agents=n, seed=0,
-        world_spawning_x=s, world_spawning_y=s,
-    )  # fmt: skip
+        "navigation",
+        num_envs=e,
+        device="cpu",
+        n_agents=n,
+        seed=0,
+        world_spawning_x=s,
+        world_spawning_y=s,
+    )
     env.reset()
     gen = torch.Generator().manual_seed(0)
 
@@ -84,14 +89,22 @@ def process_rates(tree: Path, n: int, seconds: float, repeats: int) -> dict[str,
     ``tree`` first on its path; the reference is this checkout's code either way."""
     script = Path(__file__).with_name("single_env_speed.py")
     out = subprocess.run(
-        [sys.executable, str(script), "--agents", str(n), "--seconds", str(seconds),
-         "--repeats", str(repeats)],
+        [
+            sys.executable,
+            str(script),
+            "--agents",
+            str(n),
+            "--seconds",
+            str(seconds),
+            "--repeats",
+            str(repeats),
+        ],
         cwd=tree.parent,
         env={**os.environ, "PYTHONPATH": str(tree)},
         check=True,
         capture_output=True,
         text=True,
-    )  # fmt: skip
+    )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 

@@ -26,8 +26,10 @@ RESULTS = Path(__file__).resolve().parent / "results"
 
 def rates(env_id: str, envs: int, blocks: int, steps: int) -> dict:
     """Env-steps per second of both modes on the same seeds and actions, alternating blocks."""
-    modes = {m: gymnasium.make_vec(env_id, envs, vectorization_mode=m)
-             for m in ("vector_entry_point", "sync")}  # fmt: skip
+    modes = {
+        m: gymnasium.make_vec(env_id, envs, vectorization_mode=m)
+        for m in ("vector_entry_point", "sync")
+    }
     rng = np.random.default_rng(0)
     seconds = dict.fromkeys(modes, 0.0)
     for env in modes.values():
@@ -43,9 +45,12 @@ def rates(env_id: str, envs: int, blocks: int, steps: int) -> dict:
     for env in modes.values():
         env.close()
     done = blocks * steps * envs
-    return {"id": env_id, "vector": done / seconds["vector_entry_point"],
-            "sync": done / seconds["sync"],
-            "ratio": seconds["sync"] / seconds["vector_entry_point"]}  # fmt: skip
+    return {
+        "id": env_id,
+        "vector": done / seconds["vector_entry_point"],
+        "sync": done / seconds["sync"],
+        "ratio": seconds["sync"] / seconds["vector_entry_point"],
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -69,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
         *(
             f"| `{r['id']}` | {r['vector']:,.0f} | {r['sync']:,.0f} | {r['ratio']:.1f}x |"
             for r in rows
-        ),  # fmt: skip
+        ),
         "",
     ]
     args.out.write_text("\n".join(lines))

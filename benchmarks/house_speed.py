@@ -78,16 +78,19 @@ elif case == "double 100":
     r = rate(lambda: env.step(env.nominal_actions()), 100)
 print(json.dumps(r))
 """
-CASES = ["batched 16x256", "batched 64x32", "single 6", "arrays 1000", "arrays 10000",
-         "double 100"]  # fmt: skip
+CASES = ["batched 16x256", "batched 64x32", "single 6", "arrays 1000", "arrays 10000", "double 100"]
 
 
 def measure(tree: Path, case: str, seconds: float) -> float:
     env = dict(os.environ, PYTHONPATH=str(tree), RSVO_NUM_THREADS="1")
     out = subprocess.run(
         [sys.executable, "-c", CASE, case, str(seconds)],
-        cwd=tree, env=env, capture_output=True, text=True, check=True,
-    )  # fmt: skip
+        cwd=tree,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -101,8 +104,11 @@ def main() -> int:
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         other = Path(tmp) / "other"
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(other),
-                        args.rev], check=True, capture_output=True)  # fmt: skip
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(other), args.rev],
+            check=True,
+            capture_output=True,
+        )
         try:
             rates: dict[tuple[str, str], list[float]] = {}
             for block in range(args.blocks):
@@ -112,10 +118,12 @@ def main() -> int:
                         rates.setdefault((name, case), []).append(measure(tree, case, args.seconds))
                 print(f"block {block + 1}/{args.blocks}", flush=True)
         finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(other)],
-                           check=True)  # fmt: skip
-    head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-                          capture_output=True, text=True).stdout.strip()  # fmt: skip
+            subprocess.run(
+                ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(other)], check=True
+            )
+    head = subprocess.run(
+        ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+    ).stdout.strip()
     lines = [
         "# The house's speed: this checkout against the library before the move",
         "",

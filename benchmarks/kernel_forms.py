@@ -63,8 +63,15 @@ def dense_forms(n: int, e: int) -> dict[str, Callable[[], tuple]]:
     flt = sim.filters[0]
     bodies = next(iter(flt._default_bodies.values()))
     u = np.ascontiguousarray(sim.nominal_controls())
-    args = (np.ascontiguousarray(s.positions), u, sim.weights.matrix, float(flt.config.gamma),
-            bodies.radii, bodies.lo, bodies.hi)  # fmt: skip
+    args = (
+        np.ascontiguousarray(s.positions),
+        u,
+        sim.weights.matrix,
+        float(flt.config.gamma),
+        bodies.radii,
+        bodies.lo,
+        bodies.hi,
+    )
 
     def run(kernel) -> Callable[[], tuple]:
         def call() -> tuple:
@@ -85,8 +92,14 @@ def csr_forms(n: int) -> dict[str, Callable[[], tuple]]:
     rows = flt.apply(s.positions, u, s.theta, None, sim.weights.matrix, with_rows=True).rows
     bodies = next(iter(flt._default_bodies.values()))
     nominal, lo, hi, _ = exact._batch(u.reshape(-1, 2), bodies.lo, bodies.hi)
-    args = (nominal, np.ascontiguousarray(rows.flat_A), np.ascontiguousarray(rows.flat_b),
-            np.ascontiguousarray(rows.offsets, dtype=np.int64), lo, hi)  # fmt: skip
+    args = (
+        nominal,
+        np.ascontiguousarray(rows.flat_A),
+        np.ascontiguousarray(rows.flat_b),
+        np.ascontiguousarray(rows.offsets, dtype=np.int64),
+        lo,
+        hi,
+    )
 
     def run(kernel) -> Callable[[], tuple]:
         def call() -> tuple:
@@ -107,30 +120,36 @@ def main() -> None:
     lines = []
     for n, e in DENSE_SIZES:
         t = race(dense_forms(n, e), args.repeats)
-        lines.append(f"| dense pass | {n} x {e} | {n * e} | {t['serial']:.1f} | {t['prange']:.1f} "
-                     f"| {t['prange'] / t['serial']:.2f} |")  # fmt: skip
+        lines.append(
+            f"| dense pass | {n} x {e} | {n * e} | {t['serial']:.1f} | {t['prange']:.1f} "
+            f"| {t['prange'] / t['serial']:.2f} |"
+        )
         print(lines[-1], flush=True)
     for n in CSR_SIZES:
         t = race(csr_forms(n), args.repeats)
-        lines.append(f"| CSR solve | {n} x 1 | {n} | {t['serial']:.1f} | {t['prange']:.1f} "
-                     f"| {t['prange'] / t['serial']:.2f} |")  # fmt: skip
+        lines.append(
+            f"| CSR solve | {n} x 1 | {n} | {t['serial']:.1f} | {t['prange']:.1f} "
+            f"| {t['prange'] / t['serial']:.2f} |"
+        )
         print(lines[-1], flush=True)
-    text = "\n".join([
-        "# Serial or prange form, on one thread",
-        "",
-        f"Written by `python benchmarks/kernel_forms.py` ({platform.machine()}, numba "
-        f"{numba.__version__}, Python {platform.python_version()}, one thread). Microseconds a "
-        f"call, the best of {args.repeats} alternating blocks; both forms give the same outputs "
-        "bit for bit. The library calls the prange form from "
-        f"`threads.OUTLINED_THRESHOLD` = {threads.OUTLINED_THRESHOLD} agents a call "
-        "(`rsvo_env/util/threads.py`).",
-        "",
-        "| kernel | N x E | agents a call | serial [µs] | prange, one thread [µs] "
-        "| prange / serial |",
-        "|---|---|---|---|---|---|",
-        *lines,
-        "",
-    ])  # fmt: skip
+    text = "\n".join(
+        [
+            "# Serial or prange form, on one thread",
+            "",
+            f"Written by `python benchmarks/kernel_forms.py` ({platform.machine()}, numba "
+            f"{numba.__version__}, Python {platform.python_version()}, one thread). Microseconds a "
+            f"call, the best of {args.repeats} alternating blocks; both forms give the same "
+            "outputs bit for bit. The library calls the prange form from "
+            f"`threads.OUTLINED_THRESHOLD` = {threads.OUTLINED_THRESHOLD} agents a call "
+            "(`rsvo_env/util/threads.py`).",
+            "",
+            "| kernel | N x E | agents a call | serial [µs] | prange, one thread [µs] "
+            "| prange / serial |",
+            "|---|---|---|---|---|---|",
+            *lines,
+            "",
+        ]
+    )
     out = ROOT / "benchmarks" / "results" / "kernel_forms.md"
     out.write_text(text)
     print(f"wrote {out}")

@@ -63,8 +63,12 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
     for kernel in KERNELS.values():  # compile outside the timing
-        kernel(np.zeros((1, 4, 2)) + np.arange(4)[:, None], 2, np.empty((1, 4, 2)),
-               np.empty((1, 4, 2), dtype=np.int64))  # fmt: skip
+        kernel(
+            np.zeros((1, 4, 2)) + np.arange(4)[:, None],
+            2,
+            np.empty((1, 4, 2)),
+            np.empty((1, 4, 2), dtype=np.int64),
+        )
     rows, worst = [], 1.0
     for e, n, k in CELLS:
         if k >= n:
@@ -79,23 +83,25 @@ def main() -> None:
             f"| {choice} | {t[choice] / t[fastest]:.2f} |"
         )
         print(rows[-1], flush=True)
-    text = "\n".join([
-        "# k-nearest-neighbour kernels",
-        "",
-        f"Written by `python benchmarks/knn_speed.py` ({platform.machine()}, one thread, "
-        f"Python {platform.python_version()}). Nanoseconds per agent per query, the best of "
-        f"{args.repeats} alternating bursts; positions drifting as in a stepping env (each call "
-        "moves every agent by about 0.1 at a spacing of about 2). All three "
-        "kernels return the same neighbours bit for bit (`tests/test_neighbors.py`).",
-        "",
-        "| E | N | k | insertion [ns] | ranking [ns] | env lanes [ns] | picked "
-        "| picked / fastest |",
-        "|---|---|---|---|---|---|---|---|",
-        *rows,
-        "",
-        f"The picked kernel is at most {worst:.2f}x the fastest of the three in every cell.",
-        "",
-    ])  # fmt: skip
+    text = "\n".join(
+        [
+            "# k-nearest-neighbour kernels",
+            "",
+            f"Written by `python benchmarks/knn_speed.py` ({platform.machine()}, one thread, "
+            f"Python {platform.python_version()}). Nanoseconds per agent per query, the best of "
+            f"{args.repeats} alternating bursts; positions drifting as in a stepping env (each "
+            "call moves every agent by about 0.1 at a spacing of about 2). All three "
+            "kernels return the same neighbours bit for bit (`tests/test_neighbors.py`).",
+            "",
+            "| E | N | k | insertion [ns] | ranking [ns] | env lanes [ns] | picked "
+            "| picked / fastest |",
+            "|---|---|---|---|---|---|---|---|",
+            *rows,
+            "",
+            f"The picked kernel is at most {worst:.2f}x the fastest of the three in every cell.",
+            "",
+        ]
+    )
     out = ROOT / "benchmarks" / "results" / "knn_speed.md"
     out.write_text(text)
     print(f"wrote {out}")

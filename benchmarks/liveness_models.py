@@ -34,8 +34,7 @@ L = Unicycle.scenario_defaults["lookahead"]
 
 def run(scene: str, model: str, n: int, seeds: range, cap: int, **kw) -> dict:
     """Episodes of ``scene`` on ``seeds`` at once, ``cap`` steps at most."""
-    env = BatchedEnv(scene, num_envs=len(seeds), num_agents=n, dynamics=model, max_steps=cap,
-                     **kw)  # fmt: skip
+    env = BatchedEnv(scene, num_envs=len(seeds), num_agents=n, dynamics=model, max_steps=cap, **kw)
     env.reset(seed=list(seeds))
     E = len(seeds)
     reached = np.zeros((E, n), dtype=bool)
@@ -53,10 +52,19 @@ def run(scene: str, model: str, n: int, seeds: range, cap: int, **kw) -> dict:
         makespan[live & reached.all(1)] = step
         if (makespan > 0).all():
             break
-    return {"scene": scene, "model": model, "n": n, "seeds": E, "cap": cap,
-            "arrived": reached.mean(1), "makespan": makespan, "contacts": contacts,
-            "infeasible": infeasible, "closest": closest,
-            "seconds": time.perf_counter() - t0}  # fmt: skip
+    return {
+        "scene": scene,
+        "model": model,
+        "n": n,
+        "seeds": E,
+        "cap": cap,
+        "arrived": reached.mean(1),
+        "makespan": makespan,
+        "contacts": contacts,
+        "infeasible": infeasible,
+        "closest": closest,
+        "seconds": time.perf_counter() - t0,
+    }
 
 
 def ratio(row: dict, base: dict) -> str:
@@ -104,8 +112,16 @@ def crowd_rows(n: int, seeds: range, cap: int, **kw) -> list[dict]:
     # and goals, for its ratio, the scenario's own spacing and side given as its factors
     uni = make_scenario("crowd", dynamics="unicycle", num_agents=n)
     R = uni.params["safety_radius"]
-    base = run("crowd", "single_integrator", n, seeds, cap, spacing_factor=uni.spacing / R,
-               side_factor=uni.side / (np.sqrt(n) * R), **kw)  # fmt: skip
+    base = run(
+        "crowd",
+        "single_integrator",
+        n,
+        seeds,
+        cap,
+        spacing_factor=uni.spacing / R,
+        side_factor=uni.side / (np.sqrt(n) * R),
+        **kw,
+    )
     base["label"] = "single integrator, the unicycle's layout"
     rows.append(base)
     return rows
@@ -150,8 +166,11 @@ def main(argv: list[str] | None = None) -> int:
     rows = crowd_rows(100, seeds, 4000, **CROWD)
     out += crowd_section(rows, "### Crowd of 100, dt = 0.05, gamma = 20 (as the crowd table)")
     rows = crowd_rows(100, seeds, 20000, theta_range=(1.0, 10.0))
-    out += crowd_section(rows, "### Crowd of 100 at the scenario's defaults (dt = 0.01, gamma ="
-                         " 10), the step limit raised to 20,000")  # fmt: skip
+    out += crowd_section(
+        rows,
+        "### Crowd of 100 at the scenario's defaults (dt = 0.01, gamma ="
+        " 10), the step limit raised to 20,000",
+    )
     if not args.quick:
         big = []
         for model in MODELS[1:]:
@@ -159,8 +178,7 @@ def main(argv: list[str] | None = None) -> int:
             r["label"] = model.replace("_", " ")
             big.append(r)
             print("crowd 1000", model, r["arrived"].mean(), flush=True)
-        out += ["### Crowd of 1,000, dt = 0.05, gamma = 20, 8,000 steps", "",
-                *table(big, None)]  # fmt: skip
+        out += ["### Crowd of 1,000, dt = 0.05, gamma = 20, 8,000 steps", "", *table(big, None)]
     for scene, n in (("doorway", 8), ("doorway", 16), ("obstacle_field", 10)):
         rows = []
         for model in MODELS:
@@ -169,8 +187,12 @@ def main(argv: list[str] | None = None) -> int:
             r["label"] = model.replace("_", " ")
             rows.append(r)
             print(scene, n, model, r["arrived"].mean(), r["makespan"].tolist(), flush=True)
-        out += [f"### {scene.replace('_', ' ').capitalize()}, {n} agents, the scene's defaults"
-                " and step limit", "", *table(rows, rows[0])]  # fmt: skip
+        out += [
+            f"### {scene.replace('_', ' ').capitalize()}, {n} agents, the scene's defaults"
+            " and step limit",
+            "",
+            *table(rows, rows[0]),
+        ]
     replace_section(args.out, HEADING, out, "## Circular swap")
     return 0
 

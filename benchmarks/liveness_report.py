@@ -49,8 +49,11 @@ def circular_section(circ: list) -> list[str]:
     for c in circ:
         a, s = c["asymmetric"], c["symmetric"]
         ra, rs = c["asymmetric_rotated"], c["symmetric_rotated"]
-        finished = "" if ra["finished"] == rs["finished"] == 10 else (
-            f" ({ra['finished']} / {rs['finished']} of 10 finished)")  # fmt: skip
+        finished = (
+            ""
+            if ra["finished"] == rs["finished"] == 10
+            else (f" ({ra['finished']} / {rs['finished']} of 10 finished)")
+        )
         lines.append(
             f"| {c['n']}{PAPER_ROW if c['nominal'] == 'move_to_goal' else ''} | "
             f"{a['makespan'] or '-'} | {s['makespan'] or '-'} | "
@@ -98,8 +101,11 @@ def crowd_table(rows: list) -> list[str]:
         )
     lines += ["", "Per seed, makespan ours / ORCA ('-': not every agent arrived by the cap):", ""]
     for n in sorted({r["n"] for r in rows}):
-        cells = [f"{r['ours']['makespan'] or '-'} / {r['orca']['makespan'] or '-'}"
-                 for r in rows if r["n"] == n]  # fmt: skip
+        cells = [
+            f"{r['ours']['makespan'] or '-'} / {r['orca']['makespan'] or '-'}"
+            for r in rows
+            if r["n"] == n
+        ]
         lines.append(f"- N = {n:,}: " + ", ".join(cells))
     return lines
 
@@ -111,8 +117,10 @@ def _at(arrived, t: float) -> float:
 
 def share_at(rows: list, seconds: tuple[float, ...]) -> list[str]:
     """The share of agents arrived at given times, ours and ORCA's, one line a run."""
-    lines = ["| N | seed | " + " | ".join(f"{t:.0f} s, ours / ORCA" for t in seconds) + " |",
-             "|---|---|" + "---|" * len(seconds)]  # fmt: skip
+    lines = [
+        "| N | seed | " + " | ".join(f"{t:.0f} s, ours / ORCA" for t in seconds) + " |",
+        "|---|---|" + "---|" * len(seconds),
+    ]
     for r in rows:
         cells = []
         for t in seconds:
@@ -196,9 +204,12 @@ def diagnosis_section(rows: list, long: list = (), start: float = 25.0) -> list[
     for r in rows:
         at = [_at(r["ours"]["arrived"], t) for t in DIAGNOSIS_MARKS]
         least, k, _ = _least(r["ours"]["arrived"], orca, start)
-        lines.append(f"| {r['label']} | " + " | ".join(f"{100 * x:.1f} %" for x in at)
-                     + f" | {at[-1] / orca_last:.2f} | {least:.2f} ({(k + 1) * DT:.2f} s) |"
-                     f" {r['ours']['closest']:.4f} |")  # fmt: skip
+        lines.append(
+            f"| {r['label']} | "
+            + " | ".join(f"{100 * x:.1f} %" for x in at)
+            + f" | {at[-1] / orca_last:.2f} | {least:.2f} ({(k + 1) * DT:.2f} s) |"
+            f" {r['ours']['closest']:.4f} |"
+        )
     if long:
         lines += [
             "",
@@ -211,8 +222,11 @@ def diagnosis_section(rows: list, long: list = (), start: float = 25.0) -> list[
         ]
         for r in long:
             at = [_at(r["ours"]["arrived"], t) for t in BIG_MARKS]
-            lines.append(f"| {r['label']} | " + " | ".join(f"{100 * x:.1f} %" for x in at)
-                         + f" | {r['ours']['closest']:.4f} |")  # fmt: skip
+            lines.append(
+                f"| {r['label']} | "
+                + " | ".join(f"{100 * x:.1f} %" for x in at)
+                + f" | {r['ours']['closest']:.4f} |"
+            )
     return [*lines, ""]
 
 
@@ -297,8 +311,14 @@ def write(path: Path, rows: list, circ: list, extra: dict, quick: bool) -> None:
     # liveness_models.py's survive a full run
     old = path.read_text() if path.exists() else ""
     path.write_text("\n".join(lines) + "\n")
-    for heading in (BIG_HEADING, DIAGNOSIS_HEADING, SYMMETRIC_HEADING, HELD_OUT_HEADING,
-                    LEARNED_HEADING, MODELS_HEADING):  # fmt: skip
+    for heading in (
+        BIG_HEADING,
+        DIAGNOSIS_HEADING,
+        SYMMETRIC_HEADING,
+        HELD_OUT_HEADING,
+        LEARNED_HEADING,
+        MODELS_HEADING,
+    ):
         if heading in old:
             start, end = _span(old, heading)
             body = old[start:end].rstrip("\n").split("\n")
@@ -331,12 +351,20 @@ def plot(rows: list, path: Path) -> None:
     fig, axes = plt.subplots(1, len(sizes), figsize=(4.2 * len(sizes), 3.6), squeeze=False)
     for ax, n in zip(axes[0], sizes, strict=True):
         for r in [r for r in rows if r["n"] == n]:
-            for key, color, label in (("ours", "tab:red", "ours (R-ORCA + filter)"),
-                                      ("orca", "tab:blue", "ORCA (pyrvo)")):  # fmt: skip
+            for key, color, label in (
+                ("ours", "tab:red", "ours (R-ORCA + filter)"),
+                ("orca", "tab:blue", "ORCA (pyrvo)"),
+            ):
                 y = r[key]["arrived"]
                 t = DT * np.arange(1, len(y) + 1)
-                ax.plot(t, 100 * y, color=color, alpha=0.6, lw=1,
-                        label=label if r["seed"] == 0 else None)  # fmt: skip
+                ax.plot(
+                    t,
+                    100 * y,
+                    color=color,
+                    alpha=0.6,
+                    lw=1,
+                    label=label if r["seed"] == 0 else None,
+                )
         ax.set_title(f"crowd, N = {n:,}")
         ax.set_xlabel("time [s]")
         ax.set_ylabel("agents that reached their goals [%]")

@@ -53,9 +53,17 @@ def footprint(n: int, case: str) -> dict:
     rows = flt.filter(x, nominal, theta).rows
     row_bytes = sum(
         getattr(rows, f).nbytes
-        for f in ("flat_A", "flat_b", "offsets", "flat_neighbor", "flat_h", "pair_h",
-                  "flat_unrecoverable", "flat_capped")
-    )  # fmt: skip
+        for f in (
+            "flat_A",
+            "flat_b",
+            "offsets",
+            "flat_neighbor",
+            "flat_h",
+            "pair_h",
+            "flat_unrecoverable",
+            "flat_capped",
+        )
+    )
     floor_bytes = sum(a.nbytes for a in pairs.floor_of(theta[None], "asymmetric"))
     return {
         "pairs": int(rows.n_pairs),

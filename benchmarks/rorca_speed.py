@@ -56,8 +56,15 @@ def stage_against_orca(n: int, blocks: int) -> dict:
         )
         # with the crowd's own velocities, and every agent at rest: then every one counts as
         # stuck and every one probes every heading (the most the rule can cost)
-        route = (x, v, orca.goals[None], parked, pref, sc.params["safety_radius"],
-                 sc.params["u_max"])  # fmt: skip
+        route = (
+            x,
+            v,
+            orca.goals[None],
+            parked,
+            pref,
+            sc.params["safety_radius"],
+            sc.params["u_max"],
+        )
         still = (x, 0.0 * v, *route[2:])
         rorca.rorca_velocities(*args, rules=rules)  # compiled, warm
         rorca_route.routed(*route)
@@ -76,9 +83,16 @@ def stage_against_orca(n: int, blocks: int) -> dict:
         still_s += time.perf_counter() - t0
         orca_s += orca_block(orca, reps)
     per = 1e6 / (blocks * reps * n)
-    return {"n": n, "orca": orca_s * per, "rorca": rorca_s * per, "ratio": rorca_s / orca_s,
-            "route": route_s * per, "routed_ratio": (rorca_s + route_s) / orca_s,
-            "still": still_s * per, "still_ratio": (rorca_s + still_s) / orca_s}  # fmt: skip
+    return {
+        "n": n,
+        "orca": orca_s * per,
+        "rorca": rorca_s * per,
+        "ratio": rorca_s / orca_s,
+        "route": route_s * per,
+        "routed_ratio": (rorca_s + route_s) / orca_s,
+        "still": still_s * per,
+        "still_ratio": (rorca_s + still_s) / orca_s,
+    }
 
 
 def orca_block(orca: Orca, reps: int) -> float:
@@ -163,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
             f" {r['route']:.2f} | {r['routed_ratio']:.2f} | {r['still']:.2f} |"
             f" {r['still_ratio']:.2f} |"
             for r in rows
-        ),  # fmt: skip
+        ),
         "",
         'What a user calls, `BatchedEnv("crowd", num_envs=1, num_agents=N).nominal_actions()`'
         " (R-ORCA's stage with all around it: move-to-goal, routing, the rules' clocks, the"
@@ -176,7 +190,7 @@ def main(argv: list[str] | None = None) -> int:
         *(
             f"| {r['n']:,} | {r['orca']:.2f} | {r['public']:.2f} | {r['ratio']:.2f} |"
             for r in public
-        ),  # fmt: skip
+        ),
         "",
         "Routing around knots (`rsvo_env.control.rorca_route`) timed on the same crowd, with its"
         " agents' velocities (ORCA's), and with every agent at rest: then every one counts as"

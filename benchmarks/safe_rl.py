@@ -55,10 +55,20 @@ METHODS = {
 def command(scenario: str, method: str, seed: int, out: Path) -> list[str]:
     sets = [a for s in METHODS[method][1] for a in ("--set", s)]
     return [
-        sys.executable, "-m", "rsvo_env.training.train", "--scenario", scenario, *sets,
-        "--timesteps", str(BUDGET[scenario]), "--seed", str(seed), "--no-progress",
-        "--out", str(out),
-    ]  # fmt: skip
+        sys.executable,
+        "-m",
+        "rsvo_env.training.train",
+        "--scenario",
+        scenario,
+        *sets,
+        "--timesteps",
+        str(BUDGET[scenario]),
+        "--seed",
+        str(seed),
+        "--no-progress",
+        "--out",
+        str(out),
+    ]
 
 
 def seeds_of(method: str) -> tuple[int, ...]:
@@ -98,8 +108,12 @@ def progress(run: Path) -> dict[str, np.ndarray]:
     and the contacts so far."""
     with open(run / "progress.csv") as f:
         rows = [r for r in csv.DictReader(f) if r.get("rollout/episode_cost")]
-    keys = {"steps": "time/total_timesteps", "return": "rollout/return",
-            "cost": "rollout/episode_cost", "contacts": "rollout/contact_agent_steps"}  # fmt: skip
+    keys = {
+        "steps": "time/total_timesteps",
+        "return": "rollout/return",
+        "cost": "rollout/episode_cost",
+        "contacts": "rollout/contact_agent_steps",
+    }
     return {k: np.array([float(r[v]) for r in rows]) for k, v in keys.items()}
 
 
@@ -149,10 +163,13 @@ def table(results: dict) -> list[str]:
             f"| {scenario} | {METHODS[method][0]} | {spread(get('success_rate'), 0, True)} | "
             f"{spread(get('completion_time'))} | {spread(get('episode_return'))} | "
             f"{spread(get('episode_cost'), 3)} | "
-            + (f"{spread(get('train_contacts'), 0)} | {spread(get('train_cost_final'), 3)} | "
-               if "train_contacts" in seeds[0] else "- | - | ")
+            + (
+                f"{spread(get('train_contacts'), 0)} | {spread(get('train_cost_final'), 3)} | "
+                if "train_contacts" in seeds[0]
+                else "- | - | "
+            )
             + f"{trained} |"
-        )  # fmt: skip
+        )
     return lines
 
 

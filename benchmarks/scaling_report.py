@@ -29,19 +29,31 @@ def plot(rows: list[dict], di: list[dict], path: Path) -> None:
         pts = [(r["n"], r[key]) for r in rows if r.get(key)]
         if pts:
             ax.plot(*zip(*pts, strict=True), style, label=label)
-    for barrier, style in (("segment", "P-"), ("backup", "D:"), ("braking", "x:"),
-                           ("unicycle, gamma 10 (the single integrator's)", "v-"),
-                           ("unicycle, gamma 2 (the double integrator's)", "^:")):  # fmt: skip
+    for barrier, style in (
+        ("segment", "P-"),
+        ("backup", "D:"),
+        ("braking", "x:"),
+        ("unicycle, gamma 10 (the single integrator's)", "v-"),
+        ("unicycle, gamma 2 (the double integrator's)", "^:"),
+    ):
         pts = [(d["n"], d["di"]) for d in di if d.get("barrier", "braking") == barrier]
         if pts:
-            label = (f"double integrator, {barrier} barrier" if barrier[0] != "u"
-                     else barrier.split(" (")[0])  # fmt: skip
+            label = (
+                f"double integrator, {barrier} barrier"
+                if barrier[0] != "u"
+                else barrier.split(" (")[0]
+            )
             ax.plot(*zip(*pts, strict=True), style, label=f"{label}, theta 1..10")
     # the double integrator's own reference: its ratios are to this run, not to section 1's
     ref = {d["n"]: d["si"] for d in di if d.get("barrier") == "segment"}
     if ref:
-        ax.plot(list(ref), list(ref.values()), ".:", color="grey",
-                label="single integrator, in the double integrator's run")  # fmt: skip
+        ax.plot(
+            list(ref),
+            list(ref.values()),
+            ".:",
+            color="grey",
+            label="single integrator, in the double integrator's run",
+        )
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("agents N")
@@ -99,8 +111,14 @@ def section_one(text: str) -> list[dict]:
         cells = [c.strip() for c in line.strip("|").split("|")]
         if len(cells) == 9 and cells[0].replace(",", "").isdigit():
             num = [float(c) if c.replace(".", "").isdigit() else None for c in cells]
-            rows.append({"n": int(cells[0].replace(",", "")), "ours_equal": num[2],
-                         "orca": num[3], "ours_spread": num[5]})  # fmt: skip
+            rows.append(
+                {
+                    "n": int(cells[0].replace(",", "")),
+                    "ours_equal": num[2],
+                    "orca": num[3],
+                    "ours_spread": num[5],
+                }
+            )
     return rows
 
 

@@ -22,8 +22,10 @@ def main() -> None:
     for scenario, theta in SCENES.items():
         path = ROOT / "benchmarks" / "results" / f"{scenario}.gif"
         out = run(scenario, theta=theta, gif=path, gif_every=10, render_size=400)
-        print(f"{scenario}: completed at step {out['completed']}, "
-              f"{out['n_collision_steps']} collision steps -> {path}")  # fmt: skip
+        print(
+            f"{scenario}: completed at step {out['completed']}, "
+            f"{out['n_collision_steps']} collision steps -> {path}"
+        )
 
 
 if __name__ == "__main__":

@@ -70,8 +70,9 @@ def hyper_note(cfg: dict[str, Any]) -> str:
     return f"{arch} {act} layers, {ppo['n_epochs']} epochs, minibatches of {ppo['batch_size']}"
 
 
-def run(path: str, updates: int, scenario: str = "circular_swap", nominal: str | None = None
-        ) -> dict[str, float]:  # fmt: skip
+def run(
+    path: str, updates: int, scenario: str = "circular_swap", nominal: str | None = None
+) -> dict[str, float]:
     """One PPO run of ``updates`` updates on ``path`` ("batched" or "single"), the config of
     ``scenario`` with ``env.nominal`` set to ``nominal`` where given: rates and time shares."""
     cfg = configs.load(scenario)
@@ -137,17 +138,20 @@ def table(first: str, rows: dict[str, dict[str, float]]) -> list[str]:
             f"| {label} | {r['rate']:.0f} | {r['env']:.0%} | {r['filter']:.0%} | "
             f"{r['policy']:.0%} | {r['update']:.0%} |"
             for label, r in rows.items()
-        ),  # fmt: skip
+        ),
     ]
 
 
 def nominal_section(updates: int, repeats: int) -> list[str]:
     """The crowd config trained with R-ORCA under the residual against move-to-goal under it,
     alternating runs, the best of each."""
-    best = best_of(repeats, {
-        nominal: (lambda nominal=nominal: run("batched", updates, "crowd", nominal))
-        for nominal in ("move_to_goal", "rorca")
-    })  # fmt: skip
+    best = best_of(
+        repeats,
+        {
+            nominal: (lambda nominal=nominal: run("batched", updates, "crowd", nominal))
+            for nominal in ("move_to_goal", "rorca")
+        },
+    )
     cfg = configs.resolve(configs.load("crowd"))
     lines = [
         "## The residual's base: R-ORCA against move-to-goal",
@@ -169,9 +173,10 @@ def main() -> int:
     p.add_argument("--repeats", type=int, default=3)
     args = p.parse_args()
     torch.set_num_threads(1)
-    best = best_of(args.repeats, {
-        path: (lambda path=path: run(path, args.updates)) for path in ("batched", "single")
-    })  # fmt: skip
+    best = best_of(
+        args.repeats,
+        {path: (lambda path=path: run(path, args.updates)) for path in ("batched", "single")},
+    )
     ratio = best["batched"]["rate"] / best["single"]["rate"]
     cfg = configs.resolve(configs.load("circular_swap"))
     lines = [
@@ -191,7 +196,7 @@ def main() -> int:
                 f"BatchedEnv, {cfg['num_envs']} envs": best["batched"],
                 "one ParallelEnv": best["single"],
             },
-        ),  # fmt: skip
+        ),
     ]
     ceiling = 1.0 / best["single"]["update"]
     lines += [

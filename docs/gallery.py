@@ -50,9 +50,10 @@ def scenario_page(env_id: str, scenario: str) -> str:
         rows += f"\n| `dynamics` | `{cls.dynamics!r}` (or any of `{cls.models!r}`) |"
         rows += "".join(
             f"\n| `{k}` (with `dynamics={m.name!r}`) | `{v!r}` |"
-            for m in dynamics.MODELS.values() if m.name != cls.dynamics
+            for m in dynamics.MODELS.values()
+            if m.name != cls.dynamics
             for k, v in m.scenario_defaults.items()
-        )  # fmt: skip
+        )
     return f"""# {title(scenario)}: `{env_id}`
 
 {about}

@@ -102,8 +102,11 @@ def cluster(rng, family, E, k, scale):
         p = u * 10.0 * scale
         heading = -u + rng.normal(0, 0.3, (E, k, 2))
     else:
-        side = {"head-on": [[-1, 0], [1, 0]], "crossing": [[-1, 0], [0, -1]],
-                "overtaking": [[-1, 0], [1, 0]]}[family]  # fmt: skip
+        side = {
+            "head-on": [[-1, 0], [1, 0]],
+            "crossing": [[-1, 0], [0, -1]],
+            "overtaking": [[-1, 0], [1, 0]],
+        }[family]
         p = np.broadcast_to(np.array(side, float) * 10.0 * scale, (E, 2, 2)).copy()
         heading = -np.array(side, float) + rng.normal(0, 0.05, (E, 2, 2))
         if family == "overtaking":  # both move right, the one behind faster

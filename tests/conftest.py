@@ -34,9 +34,10 @@ def no_unasserted_warning_of_ours():
     # a ResourceWarning comes from the garbage collector, at whatever line ran then: its place
     # says nothing of its cause, so it is left to the summary
     ours = [
-        w for w in caught
+        w
+        for w in caught
         if os.path.abspath(w.filename).startswith(PROJECT) and w.category is not ResourceWarning
-    ]  # fmt: skip
+    ]
     for w in caught:
         if w not in ours:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)

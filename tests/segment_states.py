@@ -23,8 +23,14 @@ def _cross(o, a, b):
 def segment_distance(a0, a1, b0, b1):
     """Exact distance of segments [a0, a1] and [b0, b1]: 0 where they cross, else the smallest
     endpoint-to-segment distance."""
-    d = np.minimum.reduce([point_segment(a0, b0, b1), point_segment(a1, b0, b1),
-                           point_segment(b0, a0, a1), point_segment(b1, a0, a1)])  # fmt: skip
+    d = np.minimum.reduce(
+        [
+            point_segment(a0, b0, b1),
+            point_segment(a1, b0, b1),
+            point_segment(b0, a0, a1),
+            point_segment(b1, a0, a1),
+        ]
+    )
     c1, c2 = _cross(a0, a1, b0), _cross(a0, a1, b1)
     c3, c4 = _cross(b0, b1, a0), _cross(b0, b1, a1)
     crossing = (c1 * c2 < 0) & (c3 * c4 < 0)

@@ -26,9 +26,14 @@ unit = st.floats(0.0, 1.0)
 
 def config(dt, gamma_dt, scale=1.0, barrier="backup", **kw):
     return FilterConfig(
-        gamma=gamma_dt / dt, safety_radius=scale, u_max=3.0 * scale, dt=dt,
-        dynamics="double_integrator", barrier=barrier, **kw,
-    )  # fmt: skip
+        gamma=gamma_dt / dt,
+        safety_radius=scale,
+        u_max=3.0 * scale,
+        dt=dt,
+        dynamics="double_integrator",
+        barrier=barrier,
+        **kw,
+    )
 
 
 # the crowds run under both barriers whose backup meets every row, each checked by its own h
@@ -191,8 +196,9 @@ def test_culled_filter_equals_all_pairs(barrier):
             w = flt.pair_weights(theta, None, Ia, Ja)
             boxes = bb.AgentBoxes(radii, -np.c_[a, a], np.c_[a, a])
             rows, _ = rows_of(p, v, w, Ia, Ja, flt.config.gamma, dt, boxes, cull=False)
-            ua, fa = solvers.solve("exact", u, rows.flat_A, rows.flat_b, rows.offsets,
-                                   -np.c_[a, a], np.c_[a, a])[:2]  # fmt: skip
+            ua, fa = solvers.solve(
+                "exact", u, rows.flat_A, rows.flat_b, rows.offsets, -np.c_[a, a], np.c_[a, a]
+            )[:2]
             assert np.array_equal(fa, res.feasible)
             assert np.abs(ua - res.actions).max() <= 1e-12 * a.max()
             assert res.rows.n_pairs < len(Ia)  # the search did cull
@@ -289,8 +295,12 @@ def test_backup_takes_walls_and_the_braking_barrier_does_not():
     cfg = FilterConfig(dynamics="double_integrator", dt=0.05, barrier="backup")
     from rsvo_env.scenarios.scenes import Scene
 
-    kw = {"starts": [[0, 0], [10, 0]], "goals": [[10, 0], [0, 0]], "dynamics": "double_integrator",
-          "walls": [((5, 3), (5, 8))]}  # fmt: skip
+    kw = {
+        "starts": [[0, 0], [10, 0]],
+        "goals": [[10, 0], [0, 0]],
+        "dynamics": "double_integrator",
+        "walls": [((5, 3), (5, 8))],
+    }
     assert Scene(**kw).num_obstacles == 1
     wall = Obstacles.of(None, [((5, 3), (5, 8))], 0.1)
     args = ([[0, 0], [10, 0]], [[1, 0], [-1, 0]], [1, 2])
@@ -334,8 +344,9 @@ def test_outside_the_safe_set_culling_is_exact_on_feasible_agents(dt, seed):
     rng = np.random.default_rng(seed)
     n = int(rng.integers(68, 93))
     p, v, radii, a, goals, theta = safe_crowd(rng, n, 1.0, 4.0, spacing=2.6)
-    flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=3.0, dt=dt,
-                                    dynamics="double_integrator"))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(gamma=10.0, safety_radius=1.0, u_max=3.0, dt=dt, dynamics="double_integrator")
+    )
     Ia, Ja = pairs.all_pairs(n)
     lo, hi = -np.c_[a, a], np.c_[a, a]
     boxes = bb.AgentBoxes(radii, lo, hi)

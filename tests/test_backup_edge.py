@@ -28,8 +28,9 @@ def test_head_on_pairs_at_h_zero_stay_feasible_at_any_speed(speed_over_c_dt, dt,
     gap = radii.sum() + L.sum()
     p = np.array([[-0.5 * gap, 0.0], [0.5 * gap, 0.0]])
     flt = SafetyFilter(config(dt, gamma_dt))
-    res = flt.filter(p, np.array([[1.0, 0.0], [-2.0, 0.0]]), [1.0, 3.0], velocities=v,
-                     radii=radii, u_max=c)  # fmt: skip
+    res = flt.filter(
+        p, np.array([[1.0, 0.0], [-2.0, 0.0]]), [1.0, 3.0], velocities=v, radii=radii, u_max=c
+    )
     assert res.feasible.all()
     h0 = pair_h(p, v, radii, c, dt, I, J)[0]
     p1, v1 = double_integrator_step(p, v, res.actions, dt)
@@ -63,8 +64,14 @@ def test_a_resting_cluster_within_rounding_of_contact_is_feasible_and_holds(scal
     flt = SafetyFilter(config(dt, 1.0, scale))
     h0 = pair_h(p, v, radii, a, dt, I, J)[0]
     for _ in range(20):
-        res = flt.filter(p, rng.uniform(-1, 1, (n, 2)) * scale, rng.uniform(0, 10, n),
-                         velocities=v, radii=radii, u_max=a)  # fmt: skip
+        res = flt.filter(
+            p,
+            rng.uniform(-1, 1, (n, 2)) * scale,
+            rng.uniform(0, 10, n),
+            velocities=v,
+            radii=radii,
+            u_max=a,
+        )
         assert res.feasible.all()
         p1, v1 = double_integrator_step(p, v, res.actions, dt)
         h1 = pair_h(p1, v1, radii, a, dt, I, J)[0]
@@ -81,8 +88,15 @@ def test_a_packed_hexagon_driven_by_its_scene_controller_stays_feasible():
         rng = np.random.default_rng(seed)
         goals = starts[rng.permutation(19)] * 1.5 + rng.uniform(-0.5, 0.5, (19, 2))
         env = rsvo_env.parallel_env(
-            "custom", starts=starts, goals=goals, radii=np.ones(19), dynamics="double_integrator",
-            dt=0.5, gamma=2.0, max_steps=120)  # fmt: skip
+            "custom",
+            starts=starts,
+            goals=goals,
+            radii=np.ones(19),
+            dynamics="double_integrator",
+            dt=0.5,
+            gamma=2.0,
+            max_steps=120,
+        )
         env.reset(seed=seed, options={"theta": rng.uniform(1, 10, 19)})
         while env.agents:
             *_, infos = env.step(env.unwrapped.nominal_actions())

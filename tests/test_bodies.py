@@ -42,8 +42,9 @@ def all_pairs_actions(flt, x, nominal, theta, radii, u_max, velocities=None):
     I, J = pairs.all_pairs(n)
     w = flt.pair_weights(theta, None, I, J)
     rows = cfg.model.rows(cfg, x, velocities, w, I, J, bodies)
-    out = solvers.solve("exact", nominal, rows.flat_A, rows.flat_b, rows.offsets, bodies.lo,
-                        bodies.hi)  # fmt: skip
+    out = solvers.solve(
+        "exact", nominal, rows.flat_A, rows.flat_b, rows.offsets, bodies.lo, bodies.hi
+    )
     return out[0], out[1]
 
 
@@ -164,8 +165,9 @@ def test_bad_bodies_are_refused_by_name(kwargs, match):
 def test_per_agent_bodies_refused_where_not_supported():
     x = np.array([[0.0, 0.0], [5.0, 0.0]])
     with pytest.raises(ValueError, match="u_min"):
-        SafetyFilter(FilterConfig(u_min=-1.0)).filter(x, np.zeros((2, 2)), np.ones(2),
-                                                      u_max=np.ones(2))  # fmt: skip
+        SafetyFilter(FilterConfig(u_min=-1.0)).filter(
+            x, np.zeros((2, 2)), np.ones(2), u_max=np.ones(2)
+        )
     uni = SafetyFilter(FilterConfig(dynamics="unicycle", u_max=2.0, lookahead=0.2, w_max=1.0))
     with pytest.raises(ValueError, match=r"u_max\[1\] = 0.1 must be above lookahead \* w_max"):
         uni.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), u_max=[1.0, 0.1])

@@ -171,8 +171,9 @@ def test_lines_through_one_feasible_point_keep_it():
 @settings(max_examples=300, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.integers(2, 12), st.floats(-3.0, 3.0),
        st.sampled_from([0.0, 1e-3, 1e-9]), st.floats(0.0, 1.0), st.booleans())  # fmt: skip
-def test_concurrent_and_tangent_lines_are_the_cone_programs(seed, K, log_scale, spread, depth,
-                                                            tangent):  # fmt: skip
+def test_concurrent_and_tangent_lines_are_the_cone_programs(
+    seed, K, log_scale, spread, depth, tangent
+):
     """Lines through one point q (anywhere in the disk, on its edge with ``depth`` 1), the
     directions anywhere or nearly parallel; with ``tangent`` one more row ``a . v <= -r``
     leaves the disk's one point -r a and the lines pass through it. Millimetres to kilometres:

@@ -51,9 +51,14 @@ def test_isolated_pairs_of_their_own_size_and_limit_keep_their_distance(scale, d
     goals = p + 3.0 * (np.repeat(p[0::2] * [1, 0], 2, axis=0) - p)
     theta = rng.uniform(0, 10, 2 * n_pairs)
     cfg = FilterConfig(
-        gamma=gamma_dt / dt, safety_radius=2.0 * scale, u_max=3.0 * scale, dt=dt,
-        dynamics="double_integrator", barrier="braking", neighbor_radius=1e4 * scale,
-    )  # fmt: skip
+        gamma=gamma_dt / dt,
+        safety_radius=2.0 * scale,
+        u_max=3.0 * scale,
+        dt=dt,
+        dynamics="double_integrator",
+        barrier="braking",
+        neighbor_radius=1e4 * scale,
+    )
     flt = SafetyFilter(cfg)
     worst, infeasible_in_safe_set, touched, steps = np.inf, 0, 0, int(round(12.0 / dt))
     for _ in range(steps):
@@ -88,8 +93,16 @@ def test_culled_equals_all_pairs(n, seed):
     p, v, radii, a = crowd(rng, n)
     theta = rng.uniform(0, 10, n)
     dt = 0.05
-    flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.2, u_max=3.0, dt=dt,
-                                    dynamics="double_integrator", barrier="braking"))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(
+            gamma=10.0,
+            safety_radius=1.2,
+            u_max=3.0,
+            dt=dt,
+            dynamics="double_integrator",
+            barrier="braking",
+        )
+    )
     goals = rng.uniform(-3 * np.sqrt(n), 3 * np.sqrt(n), (n, 2))
     active = 0
     for _ in range(8):  # a few steps in, so rows bind
@@ -107,8 +120,16 @@ def test_equal_bodies_are_the_scalar_config_to_the_bit():
     p, v, _, _ = crowd(rng, 80)
     nominal = rng.uniform(-2, 2, (80, 2))
     theta = rng.uniform(0, 10, 80)
-    flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0, dt=0.05,
-                                    dynamics="double_integrator", barrier="braking"))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(
+            gamma=10.0,
+            safety_radius=1.0,
+            u_max=2.0,
+            dt=0.05,
+            dynamics="double_integrator",
+            barrier="braking",
+        )
+    )
     scalar = flt.filter(p, nominal, theta, velocities=v)
     equal = {"radii": np.full(80, 0.5), "u_max": np.full(80, 2.0)}
     own = flt.filter(p, nominal, theta, velocities=v, **equal)
@@ -122,8 +143,16 @@ def test_a_weaker_brake_is_kept_further_away():
     (h = 0.21), so the pair must brake, and the strong agent takes what the weak one cannot."""
     p = np.array([[0.0, 0.0], [3.5, 0.0]])
     v = np.array([[2.0, 0.0], [-2.0, 0.0]])
-    flt = SafetyFilter(FilterConfig(gamma=5.0, safety_radius=1.0, u_max=3.0, dt=0.05,
-                                    dynamics="double_integrator", barrier="braking"))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(
+            gamma=5.0,
+            safety_radius=1.0,
+            u_max=3.0,
+            dt=0.05,
+            dynamics="double_integrator",
+            barrier="braking",
+        )
+    )
     strong = flt.filter(p, np.zeros((2, 2)), np.ones(2), velocities=v, u_max=[3.0, 3.0])
     weak = flt.filter(p, np.zeros((2, 2)), np.ones(2), velocities=v, u_max=[3.0, 0.5])
     assert strong.feasible.all() and weak.feasible.all()
@@ -135,13 +164,27 @@ def test_a_weaker_brake_is_kept_further_away():
 
 
 def test_the_sampled_bound_is_checked_per_pair_and_names_it():
-    flt = SafetyFilter(FilterConfig(gamma=5.0, safety_radius=1.0, u_max=1.0, dt=0.1,
-                                    dynamics="double_integrator", barrier="braking"))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(
+            gamma=5.0,
+            safety_radius=1.0,
+            u_max=1.0,
+            dt=0.1,
+            dynamics="double_integrator",
+            barrier="braking",
+        )
+    )
     p = np.array([[0.0, 0.0], [1.0, 0.0], [50.0, 0.0]])
     radii = np.array([0.004, 0.004, 0.5])  # dt^2 (A / 2 + U) = 0.01 (1 + 1.41) > 0.008
     with pytest.raises(ValueError, match=r"agents 0 and 1: dt\^2 \(A / 2 \+ U\)"):
-        flt.filter(p, np.zeros((3, 2)), np.ones(3), velocities=np.zeros((3, 2)), radii=radii,
-                   u_max=np.ones(3))  # fmt: skip
+        flt.filter(
+            p,
+            np.zeros((3, 2)),
+            np.ones(3),
+            velocities=np.zeros((3, 2)),
+            radii=radii,
+            u_max=np.ones(3),
+        )
 
 
 @pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
@@ -161,16 +204,30 @@ def test_each_agent_brakes_before_a_circle_with_its_own_limit(scale):
     speed = np.sqrt(2.0 * a * gap) * rng.uniform(0.3, 1.0, n)  # h >= 0 at the start
     v = np.zeros((n, 1, 2))
     v[:, 0, 0] = speed
-    flt = SafetyFilter(FilterConfig(gamma=5.0, safety_radius=0.4 * scale, u_max=3.0 * scale,
-                                    dt=dt, dynamics="double_integrator",
-                                           barrier="braking"))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(
+            gamma=5.0,
+            safety_radius=0.4 * scale,
+            u_max=3.0 * scale,
+            dt=dt,
+            dynamics="double_integrator",
+            barrier="braking",
+        )
+    )
     circle = Obstacles.of(circles=[(0.0, 0.0, rho)])
     closest = np.inf
     for _ in range(int(40 / dt)):
         nominal = np.zeros((n, 1, 2))
         nominal[:, 0, 0] = a  # full throttle at the circle
-        res = flt.filter(p, nominal, np.ones((n, 1)), velocities=v, radii=radii[:, None],
-                         u_max=a[:, None], obstacles=circle)  # fmt: skip
+        res = flt.filter(
+            p,
+            nominal,
+            np.ones((n, 1)),
+            velocities=v,
+            radii=radii[:, None],
+            u_max=a[:, None],
+            obstacles=circle,
+        )
         assert res.feasible.all()
         p, v = double_integrator_step(p, v, res.actions, dt)
         closest = min(closest, float(((np.linalg.norm(p[:, 0], axis=1) - rho) / radii).min()))
@@ -184,20 +241,20 @@ def test_a_custom_pair_of_double_integrators_of_their_own_size_and_limit(scale):
     a_max, a nearly head-on swap behind the filter: both arrive, bodies never touch."""
     starts = np.array([[-10.0, 0.0], [10.0, 0.3]]) * scale
     env = rsvo_env.parallel_env(
-            "custom",
-            starts=starts,
-            goals=starts[::-1] * [1, 1],
-            radii=np.array([0.3, 1.0]) * scale,
-            a_max=np.array([0.5, 3.0]) * scale,
-            u_max=2.0 * scale,
-            safety_radius=1.0 * scale,
-            goal_tolerance=0.05 * scale,
-            dynamics="double_integrator",
-            dt=0.05,
-            gamma=5.0,
-            max_steps=3000,
-            theta=[1.0, 5.0],
-        )  # fmt: skip
+        "custom",
+        starts=starts,
+        goals=starts[::-1] * [1, 1],
+        radii=np.array([0.3, 1.0]) * scale,
+        a_max=np.array([0.5, 3.0]) * scale,
+        u_max=2.0 * scale,
+        safety_radius=1.0 * scale,
+        goal_tolerance=0.05 * scale,
+        dynamics="double_integrator",
+        dt=0.05,
+        gamma=5.0,
+        max_steps=3000,
+        theta=[1.0, 5.0],
+    )
     env.reset(seed=0)
     touched = 0
     while env.agents:
@@ -222,6 +279,7 @@ def test_custom_dynamics_is_checked():
         rsvo_env.parallel_env("custom", dynamics="double_integrator", a_max=[1.0, -1.0], **kw)
     # walls: the backup barrier (the default) takes them; the braking barrier's refusal is in
     # test_backup_barrier
-    env = rsvo_env.parallel_env("custom", dynamics="double_integrator",
-                                walls=[[[2.0, -5.0], [2.0, -3.0]]], **kw)  # fmt: skip
+    env = rsvo_env.parallel_env(
+        "custom", dynamics="double_integrator", walls=[[[2.0, -5.0], [2.0, -3.0]]], **kw
+    )
     assert env.reset(seed=0)[0]

@@ -19,8 +19,12 @@ from tests.checkers import checked
 
 SCENES = ("crowd", "circular_swap", "doorway", "obstacle_field")
 MODELS = dynamics.NAMES
-IDS = {"crowd": "rsvo/Crowd-v0", "circular_swap": "rsvo/CircularSwap-v0",
-       "doorway": "rsvo/Doorway-v0", "obstacle_field": "rsvo/ObstacleField-v0"}  # fmt: skip
+IDS = {
+    "crowd": "rsvo/Crowd-v0",
+    "circular_swap": "rsvo/CircularSwap-v0",
+    "doorway": "rsvo/Doorway-v0",
+    "obstacle_field": "rsvo/ObstacleField-v0",
+}
 SMALL = {"crowd": 6, "circular_swap": 6, "doorway": 4, "obstacle_field": 4}
 
 
@@ -48,8 +52,11 @@ def test_every_scene_takes_every_model_through_every_adapter(scene, model):
 
 @pytest.mark.parametrize("model", MODELS)
 def test_pettingzoos_checker_passes_every_model_in_the_doorway(model):
-    checked(parallel_api_test, rsvo_env.parallel_env("doorway", dynamics=model, num_agents=4),
-            num_cycles=30)  # fmt: skip
+    checked(
+        parallel_api_test,
+        rsvo_env.parallel_env("doorway", dynamics=model, num_agents=4),
+        num_cycles=30,
+    )
 
 
 def test_the_models_parameters_belong_to_their_models():
@@ -81,8 +88,13 @@ def test_unicycle_layouts_start_in_the_filters_safe_set(seed):
     (facing its goal) is r_i + r_j + 2 l from every other, checked by the scene itself and
     here."""
     for scene in SCENES:
-        sc = make_scenario(scene, dynamics="unicycle", num_agents=SMALL[scene] + 10 * (
-            scene == "crowd"), lookahead=0.3, w_max=3.0)  # fmt: skip
+        sc = make_scenario(
+            scene,
+            dynamics="unicycle",
+            num_agents=SMALL[scene] + 10 * (scene == "crowd"),
+            lookahead=0.3,
+            w_max=3.0,
+        )
         rng = np.random.default_rng(seed)
         start, _, goals = sc.initial_state(rng)
         seg = goals - start
@@ -198,8 +210,15 @@ def test_the_scripted_controller_of_a_single_integrator_scene_is_unchanged_by_th
 def test_unicycle_crowds_finish_with_r_orca_on_their_look_ahead_points():
     """The crowd of 100 unicycles (dt 0.05, gamma 20, theta 1..10): every agent arrives in
     every seed, with no contact and no infeasible step (move-to-goal left 45 % short)."""
-    env = BatchedEnv("unicycle_crowd", num_envs=5, num_agents=100, dt=0.05, gamma=20.0,
-                     theta_range=(1.0, 10.0), max_steps=4000)  # fmt: skip
+    env = BatchedEnv(
+        "unicycle_crowd",
+        num_envs=5,
+        num_agents=100,
+        dt=0.05,
+        gamma=20.0,
+        theta_range=(1.0, 10.0),
+        max_steps=4000,
+    )
     env.reset(seed=list(range(5)))
     reached = np.zeros((5, 100), dtype=bool)
     for _ in range(3000):

@@ -76,10 +76,16 @@ def footprint(theta, x, monkeypatch):
     row_bytes = sum(
         a.nbytes
         for a in (
-            rows.flat_A, rows.flat_b, rows.offsets, rows.flat_neighbor, rows.flat_h,
-            rows.pair_h, rows.flat_unrecoverable, rows.flat_capped,
+            rows.flat_A,
+            rows.flat_b,
+            rows.offsets,
+            rows.flat_neighbor,
+            rows.flat_h,
+            rows.pair_h,
+            rows.flat_unrecoverable,
+            rows.flat_capped,
         )
-    )  # fmt: skip
+    )
     floor = pairs.floor_of(theta[None], "asymmetric")
     floor_bytes = sum(a.nbytes for a in floor)
     return rows.n_pairs, row_bytes + floor_bytes, res
@@ -114,8 +120,13 @@ def test_a_reused_filter_searches_with_the_radii_of_the_scores_and_bodies_in_for
     equal = np.ones(len(x))
     spread = equal.copy()
     spread[-2] = 10.0
-    for theta, radii in [(equal, None), (spread, None), (spread, np.full(len(x), 0.6)),
-                         (equal, None), (spread, None)]:  # fmt: skip
+    for theta, radii in [
+        (equal, None),
+        (spread, None),
+        (spread, np.full(len(x), 0.6)),
+        (equal, None),
+        (spread, None),
+    ]:
         got = flt.filter(x, nominal, theta, radii=radii).actions
         want = SafetyFilter(flt.config).filter(x, nominal, theta, radii=radii).actions
         np.testing.assert_array_equal(got, want)

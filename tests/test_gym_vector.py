@@ -206,13 +206,19 @@ def test_make_vec_vector_entry_point_is_the_sync_vector_of_gymnasium_make(env_id
 def test_make_vec_takes_the_filter_switch_and_refuses_drawing():
     import gymnasium
 
-    vec = gymnasium.make_vec("rsvo/Crowd-v0", 2, vectorization_mode="vector_entry_point",
-                             safety_filter=False, num_agents=6)  # fmt: skip
+    vec = gymnasium.make_vec(
+        "rsvo/Crowd-v0",
+        2,
+        vectorization_mode="vector_entry_point",
+        safety_filter=False,
+        num_agents=6,
+    )
     assert not vec.unwrapped.env.sim.filters
     assert vec.reset(seed=0)[0].shape == (2, vec.single_observation_space.shape[0])
     with pytest.raises(ValueError, match="render_mode"):
-        gymnasium.make_vec("rsvo/Crowd-v0", 2, vectorization_mode="vector_entry_point",
-                           render_mode="rgb_array")  # fmt: skip
+        gymnasium.make_vec(
+            "rsvo/Crowd-v0", 2, vectorization_mode="vector_entry_point", render_mode="rgb_array"
+        )
     stats = RecordEpisodeStatistics(vec)
     stats.reset(seed=1)
     stats.step(np.zeros(vec.action_space.shape, dtype=np.float32))

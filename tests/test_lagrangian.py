@@ -67,8 +67,14 @@ def test_the_cost_advantage_is_sb3s_gae(T, S, seed, gamma, lam):
     values = rng.random((T, S)).astype(np.float32)
     starts = (rng.random((T, S)) < 0.3).astype(np.float32)
     for t in range(T):
-        buf.add(np.zeros((S, 2)), np.zeros((S, 2)), rewards[t], starts[t],
-                th.as_tensor(values[t]), th.zeros(S))  # fmt: skip
+        buf.add(
+            np.zeros((S, 2)),
+            np.zeros((S, 2)),
+            rewards[t],
+            starts[t],
+            th.as_tensor(values[t]),
+            th.zeros(S),
+        )
     last, dones = rng.random(S).astype(np.float32), rng.random(S) < 0.3
     buf.compute_returns_and_advantage(th.as_tensor(last), dones)
     adv, ret = gae(rewards, values, starts, last, dones.astype(np.float32), gamma, lam)
@@ -78,11 +84,30 @@ def test_the_cost_advantage_is_sb3s_gae(T, S, seed, gamma, lam):
 
 def _train(out: Path, *sets: str) -> list[dict[str, str]]:
     """A short PPO-Lagrangian run without the filter (the checkout under test)."""
-    args = [sys.executable, "-m", "rsvo_env.training.train", "--scenario", "circular_swap", "--set",
-            "algo=ppo_lagrangian", "--set", "env.safety_filter=false", "--set", "ppo.n_steps=8",
-            "--set", "ppo.batch_size=384", "--set", "validation.episodes=4",
-            "--set", "validation.every=24576", "--timesteps", "24576", "--no-progress",
-            "--out", str(out)]  # fmt: skip
+    args = [
+        sys.executable,
+        "-m",
+        "rsvo_env.training.train",
+        "--scenario",
+        "circular_swap",
+        "--set",
+        "algo=ppo_lagrangian",
+        "--set",
+        "env.safety_filter=false",
+        "--set",
+        "ppo.n_steps=8",
+        "--set",
+        "ppo.batch_size=384",
+        "--set",
+        "validation.episodes=4",
+        "--set",
+        "validation.every=24576",
+        "--timesteps",
+        "24576",
+        "--no-progress",
+        "--out",
+        str(out),
+    ]
     for s in sets:
         args += ["--set", s]
     done = run_python(*args[1:], timeout=600)

@@ -133,9 +133,11 @@ def test_import_linter_contracts_are_kept(tmp_path):
     site = layout.lay_out(tmp_path / "site", copy=True)
     out = subprocess.run(
         [lint, "--no-cache", "--config", str(ROOT / "pyproject.toml")],
-        cwd=site, env=checkout.checkout_env() | {"PYTHONPATH": str(site)},
-        capture_output=True, text=True,
-    )  # fmt: skip
+        cwd=site,
+        env=checkout.checkout_env() | {"PYTHONPATH": str(site)},
+        capture_output=True,
+        text=True,
+    )
     assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
     assert "0 broken" in out.stdout and "Contracts: 2 kept, 0 broken." in out.stdout
     for layer in ("training", "wrappers", "envs", "cli"):

@@ -96,9 +96,11 @@ def test_the_written_crowds_meet_what_docs_liveness_says_of_them():
         assert late >= 0.9 and (seed != 0 or every >= 0.9)
         assert pairs[report.BIG_MARKS.index(450.0)][0] >= 99.9
     rows = [
-        re.search(r"\| 1,000 \| 10 \| ([0-9.]+) %, ([0-9.]+) % \|.*\| ([0-9.]+), [0-9.]+ \(",
-                  _section(text, heading)).groups()
+        re.search(
+            r"\| 1,000 \| 10 \| ([0-9.]+) %, ([0-9.]+) % \|.*\| ([0-9.]+), [0-9.]+ \(",
+            _section(text, heading),
+        ).groups()
         for heading in ("## Crowd", report.HELD_OUT_HEADING)
-    ]  # fmt: skip
+    ]
     for mean, worst, ratio in rows:
         assert float(mean) == float(worst) == 100.0 and float(ratio) <= 1.2

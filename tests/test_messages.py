@@ -69,8 +69,17 @@ def test_every_scenario_keyword_refuses_in_a_bounded_message(scenario, kind):
 def test_the_filter_and_the_envs_refuse_in_bounded_messages(kind):
     bad = BAD_VALUES[kind]
     messages = []
-    for field in ("gamma", "safety_radius", "u_max", "dt", "dynamics", "weighting", "solver",
-                  "barrier", "neighbor_radius"):  # fmt: skip
+    for field in (
+        "gamma",
+        "safety_radius",
+        "u_max",
+        "dt",
+        "dynamics",
+        "weighting",
+        "solver",
+        "barrier",
+        "neighbor_radius",
+    ):
         messages.append(refusal(lambda f=field: FilterConfig(**{f: bad})))
     flt = SafetyFilter(FilterConfig())
     x, u, theta = np.zeros((3, 2)) + [[0, 0], [5, 0], [0, 5]], np.zeros((3, 2)), np.ones(3)

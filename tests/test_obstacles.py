@@ -80,8 +80,9 @@ def test_culling_the_obstacle_rows_changes_no_action():
             x, bodies.radii, obstacles.capsules[None], 40, 10.0, bodies.lo, bodies.hi, False
         )
         rows = with_obstacles(rows, *full[:5])
-        ref = solvers.solve("exact", nominal, rows.flat_A, rows.flat_b, rows.offsets, bodies.lo,
-                            bodies.hi)[0]  # fmt: skip
+        ref = solvers.solve(
+            "exact", nominal, rows.flat_A, rows.flat_b, rows.offsets, bodies.lo, bodies.hi
+        )[0]
         np.testing.assert_array_equal(res.actions, ref)
         x = x + 0.05 * res.actions
     assert (res.rows.flat_neighbor < 0).any(), "no obstacle row ever bound"
@@ -100,8 +101,9 @@ def test_reference_solver_agrees_with_obstacles():
 
 
 def test_an_agent_stops_at_a_wall_and_a_circle():
-    obstacles = Obstacles.of(circles=[(0.0, 0.0, 1.0)], walls=[((2.0, -1.0), (2.0, 1.0))],
-                             thickness=0.2)  # fmt: skip
+    obstacles = Obstacles.of(
+        circles=[(0.0, 0.0, 1.0)], walls=[((2.0, -1.0), (2.0, 1.0))], thickness=0.2
+    )
     flt = SafetyFilter(FilterConfig(gamma=10.0, dt=0.05))
     x = np.array([[-3.0, 0.0], [5.0, 0.0]])
     for _ in range(200):
@@ -120,8 +122,11 @@ def test_obstacles_per_env_in_a_batch():
     x = np.array([[[-3.0, 0.0]], [[7.0, 0.0]]])
     flt = SafetyFilter(FilterConfig(gamma=10.0, dt=0.05))
     for _ in range(200):
-        x = x + 0.05 * flt.filter(x, np.full((2, 1, 2), [2.0, 0.0]), np.ones((2, 1)),
-                                  obstacles=both).actions  # fmt: skip
+        x = (
+            x
+            + 0.05
+            * flt.filter(x, np.full((2, 1, 2), [2.0, 0.0]), np.ones((2, 1)), obstacles=both).actions
+        )
     np.testing.assert_allclose(x[:, 0, 0], [-1.5, 8.5], atol=1e-6)
 
 
@@ -161,9 +166,16 @@ def test_a_double_integrator_brakes_before_a_circle_from_any_stoppable_speed(
 
     a_max, rho = 1.0 * scale, 1.0 * scale
     obstacles = Obstacles.of(circles=[(0.0, 0.0, rho)])
-    flt = SafetyFilter(FilterConfig(dynamics="double_integrator",
-                                    barrier="braking", u_max=a_max, gamma=gamma,
-                                    safety_radius=scale, dt=dt))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(
+            dynamics="double_integrator",
+            barrier="braking",
+            u_max=a_max,
+            gamma=gamma,
+            safety_radius=scale,
+            dt=dt,
+        )
+    )
     Ds = 0.5 * scale + rho
     room = 3.0 * scale
     v0 = np.sqrt(2 * a_max * room) * speed_share  # h = room - v0^2 / (2 a_max) >= 0
@@ -210,11 +222,28 @@ def test_walls_are_refused_for_the_double_integrators_braking_barrier():
     di = SafetyFilter(FilterConfig(dynamics="double_integrator", barrier="braking", u_max=2.0))
     x = np.array([[0.0, 0.0], [5.0, 0.0]])
     with pytest.raises(ValueError, match="walls are not available for the double_integrator"):
-        di.filter(x, np.zeros((2, 2)), np.ones(2), np.zeros((2, 2)),
-                  obstacles=Obstacles.of(walls=[((2.0, -1.0), (2.0, 1.0))]))  # fmt: skip
-    tight = SafetyFilter(FilterConfig(dynamics="double_integrator",
-                                      barrier="braking", u_max=2.0, dt=0.4, gamma=2.0,
-                                      safety_radius=1.0))  # fmt: skip
+        di.filter(
+            x,
+            np.zeros((2, 2)),
+            np.ones(2),
+            np.zeros((2, 2)),
+            obstacles=Obstacles.of(walls=[((2.0, -1.0), (2.0, 1.0))]),
+        )
+    tight = SafetyFilter(
+        FilterConfig(
+            dynamics="double_integrator",
+            barrier="braking",
+            u_max=2.0,
+            dt=0.4,
+            gamma=2.0,
+            safety_radius=1.0,
+        )
+    )
     with pytest.raises(ValueError, match="sampled-data guarantee"):
-        tight.filter(x, np.zeros((2, 2)), np.ones(2), np.zeros((2, 2)),
-                     obstacles=Obstacles.of(circles=[(2.0, 2.0, 0.01)]))  # fmt: skip
+        tight.filter(
+            x,
+            np.zeros((2, 2)),
+            np.ones(2),
+            np.zeros((2, 2)),
+            obstacles=Obstacles.of(circles=[(2.0, 2.0, 0.01)]),
+        )

@@ -40,8 +40,13 @@ def test_a_right_hand_rule_first_fired_after_the_resolution_resolved_no_deadlock
     """Routed R-ORCA's right-hand rule waits 5 s of no progress, so in crowds it can first fire
     after every agent has passed its midpoint: no deadlock was resolved then (NaN), never a
     negative time; where it fired first, the time is resolved - onset."""
-    kwargs = {"num_agents": 12, "dt": 0.05, "gamma": 20.0, "max_steps": 4000,
-              "theta_range": [1.0, 10.0]}  # fmt: skip
+    kwargs = {
+        "num_agents": 12,
+        "dt": 0.05,
+        "gamma": 20.0,
+        "max_steps": 4000,
+        "theta_range": [1.0, 10.0],
+    }
     seeds = list(range(1000, 1040))
     stats = evaluate(None, seeds, "crowd", **kwargs)
     res = stats["resolution"][0]

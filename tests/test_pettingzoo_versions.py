@@ -43,7 +43,7 @@ def install(version, target):
             "--target",
             str(target),
             f"pettingzoo=={version}",
-        ],  # fmt: skip
+        ],
         capture_output=True,
         text=True,
     )

@@ -21,9 +21,10 @@ def test_one_version_everywhere_written_once():
     assert out.returncode == 0 and out.stdout.strip() == f"rsvo {version}"
     tracked = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True)
     written = [
-        name for name in tracked.stdout.split()
+        name
+        for name in tracked.stdout.split()
         if name.endswith((".py", ".toml", ".cfg")) and f'"{version}"' in (ROOT / name).read_text()
-    ]  # fmt: skip
+    ]
     assert written == ["rsvo_env/__init__.py"], written
 
 

@@ -34,8 +34,7 @@ def test_4_nominal_actions_keep_theta_exactly():
     theta = np.array([2.0, 7.3, 1.0, 0.1, 10.0, 3.3])
     runs = {}
     for chosen in (True, False):
-        env = BatchedEnv("crowd", num_envs=2, num_agents=6, safety_filter=True,
-                         theta_action=chosen)  # fmt: skip
+        env = BatchedEnv("crowd", num_envs=2, num_agents=6, safety_filter=True, theta_action=chosen)
         env.reset(seed=4, options={"theta": theta})
         u = []
         for _ in range(40):
@@ -77,8 +76,9 @@ def test_12_the_vector_env_declares_the_mode_its_batched_env_has_and_the_docs_sa
     assert given.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
     made = GymnasiumVectorEnv("crowd", num_envs=2, num_agents=3)
     assert made.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
-    nxt = GymnasiumVectorEnv(BatchedEnv("crowd", num_envs=2, num_agents=3,
-                                        autoreset_mode="next_step"))  # fmt: skip
+    nxt = GymnasiumVectorEnv(
+        BatchedEnv("crowd", num_envs=2, num_agents=3, autoreset_mode="next_step")
+    )
     for env in (made, nxt):
         env = NormalizeObservation(env)
         env.reset(seed=0)
@@ -101,8 +101,9 @@ def test_7_readme_names_every_registered_step_limit():
 
     readme = " ".join((Path(__file__).parents[1] / "docs" / "environments.md").read_text().split())
     said = dict(re.findall(r"`(\w+)` (\d+)", readme.split("(`max_episode_steps`:")[1][:300]))
-    specs = {k[5:-3]: v.max_episode_steps for k, v in gymnasium.registry.items()
-             if k.startswith("rsvo/")}  # fmt: skip
+    specs = {
+        k[5:-3]: v.max_episode_steps for k, v in gymnasium.registry.items() if k.startswith("rsvo/")
+    }
     assert {k: int(v) for k, v in said.items()} == specs
 
 
@@ -121,8 +122,7 @@ def test_7_readme_names_every_registered_step_limit():
         ("ppo.ent_coef=auto", ["ppo.ent_coef", "auto"]),
     ],
 )
-def test_8_values_sb3_would_fail_on_are_refused_before_any_work(tmp_path, capsys, setting,
-                                                                 words):  # fmt: skip
+def test_8_values_sb3_would_fail_on_are_refused_before_any_work(tmp_path, capsys, setting, words):
     """They exited 1 with SB3's 15-line traceback, after config.yaml was written to --out."""
     from rsvo_env.training import train
 
@@ -143,8 +143,9 @@ def test_8_values_sb3_would_fail_on_are_refused_before_any_work(tmp_path, capsys
         (["--address", "localhost:1"], ["--address", "--engine rllib"]),
     ],
 )
-def test_9_runner_counts_are_checked_and_refused_with_the_sb3_engine(tmp_path, capsys, flags,
-                                                                     words):  # fmt: skip
+def test_9_runner_counts_are_checked_and_refused_with_the_sb3_engine(
+    tmp_path, capsys, flags, words
+):
     """``--num-env-runners -1 --num-envs-per-env-runner 0`` with the SB3 engine exited 0 and
     wrote a whole run: they were checked for RLlib only, and ignored otherwise."""
     from rsvo_env.training import train
@@ -166,8 +167,9 @@ def test_9_runner_counts_are_checked_and_refused_with_the_sb3_engine(tmp_path, c
         (["simulate", "--gif", "{tmp}/missing/x.gif"], ["missing", "does not exist"]),
     ],
 )
-def test_10_unwritable_outputs_are_found_before_any_work(tmp_path, capsys, monkeypatch, args,
-                                                         words):  # fmt: skip
+def test_10_unwritable_outputs_are_found_before_any_work(
+    tmp_path, capsys, monkeypatch, args, words
+):
     """Permission bits do not tell root (nor a virtual file system): /proc passed the check, the
     whole job ran, then a FileNotFoundError traceback; a missing folder was made silently."""
     from rsvo_env.cli import main as rsvo

@@ -78,8 +78,7 @@ def test_batched_residuals_equal_the_wrapper(name, yield_radius, interaction_rad
     kw = {"max_steps": 60, "nominal": "move_to_goal"}
     venv = BatchedEnv(name, num_envs=E, action="residual", gate_radius=0.5, **kw, **radii)
     singles = [
-        wrappers.ResidualAction(rsvo_env.parallel_env(name, **kw), **radii)  # fmt: skip
-        for _ in range(E)
+        wrappers.ResidualAction(rsvo_env.parallel_env(name, **kw), **radii) for _ in range(E)
     ]
     obs, _ = venv.reset(seed=4)
     for e, env in enumerate(singles):
@@ -120,9 +119,12 @@ def test_the_residual_scale_decides_whether_a_full_speed_command_can_reverse(sca
     """A residual straight against a full-speed scripted command: at scale 1 it cancels it, at
     scale 2 it reverses it (to the speed limit)."""
     venv = BatchedEnv(
-        "position_swap", action="residual", residual_scale=scale, safety_filter=False,
+        "position_swap",
+        action="residual",
+        residual_scale=scale,
+        safety_filter=False,
         deadlock_resolution="none",
-    )  # fmt: skip
+    )
     venv.reset(seed=0)
     x0 = venv.sim.state.positions.copy()
     toward = venv.sim.state.goals - x0
@@ -222,9 +224,13 @@ def test_a_parked_agent_steps_aside_only_when_it_may_yield(yield_radius, moves):
     """Agent 0 parked on its goal, agent 1 pressed against it on its way: a sideways residual
     moves agent 0 only with yielding on."""
     venv = BatchedEnv(
-        "position_swap", action="residual", gate_radius=0.5, yield_radius=yield_radius,
-        start=((0.0, 0.0), (1.0, 0.0)), deadlock_resolution="none",
-    )  # fmt: skip
+        "position_swap",
+        action="residual",
+        gate_radius=0.5,
+        yield_radius=yield_radius,
+        start=((0.0, 0.0), (1.0, 0.0)),
+        deadlock_resolution="none",
+    )
     venv.reset(seed=0)
     venv.sim.state.goals[0] = [[0.0, 0.0], [5.0, 0.0]]
     venv.step(np.array([[[0.0, 1.0], [0.0, 0.0]]]))
@@ -259,8 +265,14 @@ def test_a_stalled_agent_follows_the_script_with_a_stall_gate(stall_gate):
     command: with a stall gate of 1 s, an agent whose progress clock has reached 1 s takes the
     scripted step (its residual ignored), which is progress, so the policy acts again; without
     one the agents stay held."""
-    venv = BatchedEnv("position_swap", action="residual", safety_filter=False, dt=0.1,
-                      deadlock_resolution="none", stall_gate=stall_gate)  # fmt: skip
+    venv = BatchedEnv(
+        "position_swap",
+        action="residual",
+        safety_filter=False,
+        dt=0.1,
+        deadlock_resolution="none",
+        stall_gate=stall_gate,
+    )
     venv.reset(seed=0)
     s = venv.sim.state
     scripted = 0
@@ -336,8 +348,15 @@ def test_each_agent_is_held_to_its_own_limit(dynamics, limit, action):
     """A scene with ``u_max`` (``a_max``) = (0.5, 2), filter off, action (1, 0) for both: the
     first agent's input is held to 0.5 and the second may use 2 (the residual's sum was held to
     the largest limit; the unicycle's forward speed ignored its own limit)."""
-    env = BatchedEnv("custom", num_envs=1, safety_filter=False, dynamics=dynamics,
-                     action=action, **{limit: [0.5, 2.0]}, **LIMITED)  # fmt: skip
+    env = BatchedEnv(
+        "custom",
+        num_envs=1,
+        safety_filter=False,
+        dynamics=dynamics,
+        action=action,
+        **{limit: [0.5, 2.0]},
+        **LIMITED,
+    )
     env.reset(seed=0)
     for _ in range(5):
         u = env.sim.to_controls(np.array([[[1.0, 0.0], [1.0, 0.0]]]))[0]

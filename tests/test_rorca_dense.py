@@ -25,8 +25,15 @@ def grid_stage(x, v, pref, radii, theta, modes, K, parked, goals, held, u_max=2.
     r = f(np.broadcast_to(radii, (E, n))).reshape(M)
     omega = rorca_dense.matrices(theta, modes) if any(map(callable, modes)) else None
     rules = (parked.reshape(M), held.reshape(M), True, rorca.GOAL_REACH, held.reshape(M))
-    out = rorca_grid.stage(n, (xf, vf, gf, pf, r), theta, symmetric_envs(modes), omega, rules,
-                           (K, u_max, 2.0, dt, 10.0 * float(r.max())))  # fmt: skip
+    out = rorca_grid.stage(
+        n,
+        (xf, vf, gf, pf, r),
+        theta,
+        symmetric_envs(modes),
+        omega,
+        rules,
+        (K, u_max, 2.0, dt, 10.0 * float(r.max())),
+    )
     return out.reshape(E, n, 2)
 
 
@@ -90,8 +97,7 @@ def test_the_core_hands_r_orca_its_own_matrices_and_keeps_them_current(dynamics)
     """``State.omega`` is the core's weight matrix itself, rewritten in place by a reset and by
     set_weighting; the scripted controller gives the same actions as with matrices computed
     from the scores."""
-    env = BatchedEnv("crowd", num_envs=3, num_agents=16, dynamics=dynamics,
-                     theta_range=(1.0, 10.0))  # fmt: skip
+    env = BatchedEnv("crowd", num_envs=3, num_agents=16, dynamics=dynamics, theta_range=(1.0, 10.0))
     sim = env.sim
     for round_ in range(3):
         env.reset(seed=[round_, 10 + round_, 20 + round_])

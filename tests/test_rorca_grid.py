@@ -29,10 +29,19 @@ def test_the_grid_stage_equals_the_assembly_in_clusters_far_apart_and_at_any_sca
     radii = rng.uniform(0.3, 0.6, n) * unit
     theta = rng.uniform(1, 10, n)
     parked, held = rng.random(n) < 0.2, rng.random(n) < 0.5
-    expected = reference_velocities(x, v, pref, radii, theta, 2.0 * unit, 0.05, 2.0, parked,
-                                    goals, held, 10, reach)  # fmt: skip
+    expected = reference_velocities(
+        x, v, pref, radii, theta, 2.0 * unit, 0.05, 2.0, parked, goals, held, 10, reach
+    )
     got = rorca.rorca_velocities(
-        x[None], v[None], pref[None], radii, theta[None], ["asymmetric"], 2.0 * unit, 0.05, 2.0,
+        x[None],
+        v[None],
+        pref[None],
+        radii,
+        theta[None],
+        ["asymmetric"],
+        2.0 * unit,
+        0.05,
+        2.0,
         rules=rorca.Rules(parked[None], goals[None], held[None], reach=reach),
-    )[0]  # fmt: skip
+    )[0]
     assert np.array_equal(got, expected)

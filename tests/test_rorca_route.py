@@ -81,8 +81,9 @@ def test_routing_reads_the_same_in_any_unit(unit):
     rng = np.random.default_rng(7)
     x, v, g, at_goal, pref = knot_scene(rng, 2, 400, 30.0)
     base = rorca_route.routed(x, v, g, at_goal, pref, 1.0, 2.0)
-    scaled = rorca_route.routed(x * unit, v * unit, g * unit, at_goal, pref * unit, unit,
-                                2.0 * unit)  # fmt: skip
+    scaled = rorca_route.routed(
+        x * unit, v * unit, g * unit, at_goal, pref * unit, unit, 2.0 * unit
+    )
     np.testing.assert_allclose(scaled / unit, base, rtol=1e-9, atol=1e-12)
     turned = np.linalg.norm(base - pref, axis=-1) > 1e-9
     assert 0 < turned.sum() < turned.size
@@ -134,22 +135,45 @@ def test_the_goal_rule_on_its_own_clock_is_the_stages_rule_when_the_clocks_agree
     """``goal_held`` equal to ``held`` gives the stages' own goal rule bit for bit, dense and
     grid; another clock gives other velocities (the rule reads it)."""
     for n in (40, 300):
-        env = BatchedEnv("crowd", num_envs=2, num_agents=n, theta_range=(1.0, 10.0), dt=0.05,
-                         gamma=20.0, max_steps=400)  # fmt: skip
+        env = BatchedEnv(
+            "crowd",
+            num_envs=2,
+            num_agents=n,
+            theta_range=(1.0, 10.0),
+            dt=0.05,
+            gamma=20.0,
+            max_steps=400,
+        )
         env.reset(seed=2)
         for _ in range(120):
             env.step(env.nominal_actions())
         s, sc = env.sim.state, env.sim.scenario
         held = np.random.default_rng(0).uniform(size=s.at_goal.shape) < 0.5
-        args = (s.positions, s.velocities, s.goals - 0.2 * (s.goals - s.positions),
-                sc.radii * 1.05, s.theta, s.weighting, 2.0, 0.05)  # fmt: skip
+        args = (
+            s.positions,
+            s.velocities,
+            s.goals - 0.2 * (s.goals - s.positions),
+            sc.radii * 1.05,
+            s.theta,
+            s.weighting,
+            2.0,
+            0.05,
+        )
 
         runs = [
-            rorca.rorca_velocities(*args, rules=rorca.Rules(
-                parked=s.at_goal, goals=s.goals, held=held, omega=s.omega, reach=3.0,
-                goal_held=goal_held))
+            rorca.rorca_velocities(
+                *args,
+                rules=rorca.Rules(
+                    parked=s.at_goal,
+                    goals=s.goals,
+                    held=held,
+                    omega=s.omega,
+                    reach=3.0,
+                    goal_held=goal_held,
+                ),
+            )
             for goal_held in (None, held, ~held)
-        ]  # fmt: skip
+        ]
         assert np.array_equal(runs[0], runs[1])
         assert not np.array_equal(runs[0], runs[2])
 
@@ -171,8 +195,17 @@ def test_the_right_hand_rule_with_a_hold_turns_only_agents_stalled_that_long(fus
     """``rh_hold``: the agents the rule turns are those it fires for (a neighbour within the
     trigger, short of the goal) that have come no closer to their goals for the hold, on both
     after-step paths; and some are turned, some held back."""
-    env = BatchedEnv("crowd", num_envs=2, num_agents=30, theta_range=(1.0, 10.0), dt=0.05,
-                     gamma=20.0, rh_hold=0.5, max_steps=2000, rorca_route=False)  # fmt: skip
+    env = BatchedEnv(
+        "crowd",
+        num_envs=2,
+        num_agents=30,
+        theta_range=(1.0, 10.0),
+        dt=0.05,
+        gamma=20.0,
+        rh_hold=0.5,
+        max_steps=2000,
+        rorca_route=False,
+    )
     env.sim.fused_post_step = fused
     env.reset(seed=4)
     sc, s = env.sim.scenario, env.sim.state
@@ -192,16 +225,25 @@ def test_a_routed_crowd_of_400_finishes_behind_the_filter_with_no_collision(seed
     """The crowd's defaults route R-ORCA around knots (its rules set for crowds of 1,000 and
     10,000), behind the unchanged filter: every agent arrives, no pair ever closer than
     R (1 - 1e-9), and the routing turns some agents' preferred velocities on the way."""
-    env = BatchedEnv("crowd", num_envs=1, safety_filter=True, num_agents=400, max_steps=3000,
-                     dt=0.05, gamma=20.0, theta_range=(1.0, 10.0))  # fmt: skip
+    env = BatchedEnv(
+        "crowd",
+        num_envs=1,
+        safety_filter=True,
+        num_agents=400,
+        max_steps=3000,
+        dt=0.05,
+        gamma=20.0,
+        theta_range=(1.0, 10.0),
+    )
     env.reset(seed=seed)
     sc, s = env.sim.scenario, env.sim.state
     turned = []
 
     def count_turned(env):
         straight = sc.move_to_goal(s, True, sc.speed)
-        routed = rorca_route.routed(s.positions, s.velocities, s.goals, s.at_goal, straight,
-                                    1.0, sc.speed)  # fmt: skip
+        routed = rorca_route.routed(
+            s.positions, s.velocities, s.goals, s.at_goal, straight, 1.0, sc.speed
+        )
         turned.append(int((np.abs(routed - straight).max(axis=-1) > 0).sum()))
 
     reached = run_to_goals(env, 3000, count_turned)
@@ -225,8 +267,16 @@ def test_routed_crowds_of_every_model_finish_with_no_collision(model):
     """The crowd routes every model by default. The routing reads the model's steered points
     and their velocities (the unicycle's look-ahead points): routed crowds of 100 double
     integrators and unicycles arrive, every pair at least R (1 - 1e-9) apart."""
-    env = BatchedEnv("crowd", num_envs=1, num_agents=100, dynamics=model, dt=0.05, gamma=20.0,
-                     theta_range=(1.0, 10.0), max_steps=3000)  # fmt: skip
+    env = BatchedEnv(
+        "crowd",
+        num_envs=1,
+        num_agents=100,
+        dynamics=model,
+        dt=0.05,
+        gamma=20.0,
+        theta_range=(1.0, 10.0),
+        max_steps=3000,
+    )
     env.reset(seed=0)
     reached = run_to_goals(env, 3000)
     assert reached.all(), f"{int((~reached).sum())} agents never reached their goals"
@@ -242,7 +292,15 @@ def test_routed_crowds_of_every_model_finish_with_no_collision(model):
 ])  # fmt: skip
 def test_routed_refuses_bad_input_by_name(change, field):
     x = np.zeros((1, 6, 2))
-    kw = {"positions": x, "velocities": x, "goals": x, "at_goal": np.zeros((1, 6), bool),
-          "preferred": x, "scale": 1.0, "speed": 2.0, **change}  # fmt: skip
+    kw = {
+        "positions": x,
+        "velocities": x,
+        "goals": x,
+        "at_goal": np.zeros((1, 6), bool),
+        "preferred": x,
+        "scale": 1.0,
+        "speed": 2.0,
+        **change,
+    }
     with pytest.raises(ValueError, match=field):
         rorca_route.routed(**kw)

@@ -193,10 +193,14 @@ def test_nearly_head_on_pairs_at_the_boundary_are_feasible(dt, gamma_dt, reach, 
     common = rng.normal(0, vmax / 6, (n, 2))
     v[0::2], v[1::2] = common + w / 2, common - w / 2
     cfg = FilterConfig(
-        gamma=gamma_dt / dt, safety_radius=ds, u_max=a_max, dt=dt, dynamics="double_integrator",
-                                                                   barrier="braking",
+        gamma=gamma_dt / dt,
+        safety_radius=ds,
+        u_max=a_max,
+        dt=dt,
+        dynamics="double_integrator",
+        barrier="braking",
         neighbor_radius=spacing / 10,
-    )  # fmt: skip
+    )
     res = SafetyFilter(cfg).filter(
         p, rng.uniform(-a_max, a_max, (2 * n, 2)), rng.uniform(0, 10, 2 * n), velocities=v
     )

@@ -68,8 +68,12 @@ def test_scripted_episodes_behind_the_filter_never_touch(name, kwargs):
 def test_without_the_filter_a_body_in_a_wall_is_a_collision():
     """A straight run into the circle (bare env): cost 1 and a collision step once the body
     (radius 0.3) overlaps it, although its centre is 1.3 m from the circle's."""
-    sc = custom(starts=[(-4.0, 0.0), (6.0, 6.0)], goals=[(4.0, 0.0), (6.0, -6.0)],
-                radii=[0.3, 0.3], walls=None)  # fmt: skip
+    sc = custom(
+        starts=[(-4.0, 0.0), (6.0, 6.0)],
+        goals=[(4.0, 0.0), (6.0, -6.0)],
+        radii=[0.3, 0.3],
+        walls=None,
+    )
     env = rsvo_env.parallel_env("custom", safety_filter=False, **sc)
     env.reset(seed=0)
     hit = False
@@ -196,8 +200,11 @@ def test_the_doorways_script_never_heads_into_the_wall(gap):
     for side in (-1.0, 1.0):  # agents right of the wall head left, and the mirror
         x = mine * [-side, 1.0]
         goals = np.broadcast_to([side * 10.0, 0.0], x.shape)
-        state = type("S", (), {"positions": x[None], "goals": goals[None],
-                               "rh_active": np.zeros((1, len(x)), bool)})()  # fmt: skip
+        state = type(
+            "S",
+            (),
+            {"positions": x[None], "goals": goals[None], "rh_active": np.zeros((1, len(x)), bool)},
+        )()
         target = x + sc.nominal(state, right_hand=False)[0] / p["k"]
         # the segment x -> target crosses the own face (x = -side face) where it passes it
         crosses = np.sign(target[:, 0] + side * face) != np.sign(x[:, 0] + side * face)

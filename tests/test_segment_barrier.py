@@ -26,9 +26,13 @@ unit = st.floats(0.0, 1.0)
 
 def config(dt, gamma_dt, scale=1.0, **kw):
     return FilterConfig(
-        gamma=gamma_dt / dt, safety_radius=scale, u_max=3.0 * scale, dt=dt,
-        dynamics="double_integrator", **kw,
-    )  # fmt: skip
+        gamma=gamma_dt / dt,
+        safety_radius=scale,
+        u_max=3.0 * scale,
+        dt=dt,
+        dynamics="double_integrator",
+        **kw,
+    )
 
 
 def lowest(n, p, v, a, dt):
@@ -59,8 +63,9 @@ def test_rows_keep_the_segment_above_its_bound(s, angle, normal, c, dt, h, x, y,
     dist = separation(p0[[0]] - other, p1[[0]] - other, 0 * other, 0 * other, p0[[0]] - other)[1][0]
     radii = np.array([0.5 * scale, dist - 0.5 * scale - h * c * scale * dt * dt])
     boxes = sb.AgentBoxes(radii, -np.r_[box, box], np.r_[box, box])
-    rows, _ = sb.segment_rows(P, V, np.array([[0.4, 0.6]]), np.array([0]), np.array([1]),
-                              0.5 / dt, dt, boxes, cull=False)  # fmt: skip
+    rows, _ = sb.segment_rows(
+        P, V, np.array([[0.4, 0.6]]), np.array([0]), np.array([1]), 0.5 / dt, dt, boxes, cull=False
+    )
     mine = rows.owner == 0
     A, b = rows.flat_A[mine], rows.flat_b[mine]
     n = -A[0] / (0.5 * dt * dt)
@@ -81,8 +86,15 @@ def test_rows_keep_the_segment_above_its_bound(s, angle, normal, c, dt, h, x, y,
 
 # --- the theorem attacked: every QP feasible at h = 0 -----------------------------------------
 
-SETTINGS = [(0.01, 1.0, 1e-3), (0.05, 0.1, 1.0), (0.1, 1.0, 1e3), (0.1, 0.5, 1.0),
-            (0.02, 0.7, 1e3), (0.5, 1.0, 1.0), (2.0, 0.5, 1e-3)]  # fmt: skip
+SETTINGS = [
+    (0.01, 1.0, 1e-3),
+    (0.05, 0.1, 1.0),
+    (0.1, 1.0, 1e3),
+    (0.1, 0.5, 1.0),
+    (0.02, 0.7, 1e3),
+    (0.5, 1.0, 1.0),
+    (2.0, 0.5, 1e-3),
+]
 FAMILIES = (
     [("head-on", 2, 840), ("crossing", 2, 840), ("overtaking", 2, 840)]
     + [("converging", k, 840) for k in range(3, 9)]
@@ -135,8 +147,12 @@ def test_two_touching_agents_at_rest_part_and_arrive():
     barrier, the stopping disk, holds them at u = 0 for ever), never closer than touching."""
     from rsvo_env.envs.vector import BatchedEnv
 
-    kw = {"starts": [[0.0, 0.0], [1.0, 0.0]], "goals": [[-6.0, 0.0], [7.0, 0.0]],
-          "dynamics": "double_integrator", "radii": [0.5, 0.5]}  # fmt: skip
+    kw = {
+        "starts": [[0.0, 0.0], [1.0, 0.0]],
+        "goals": [[-6.0, 0.0], [7.0, 0.0]],
+        "dynamics": "double_integrator",
+        "radii": [0.5, 0.5],
+    }
     for barrier, arrives in (("segment", True), ("backup", False)):
         env = BatchedEnv("custom", num_envs=1, barrier=barrier, max_steps=3000, **kw)
         env.reset(seed=0)
@@ -155,10 +171,19 @@ def test_side_by_side_at_full_speed_keep_their_speed():
     """Two agents 1.1 D apart moving side by side at the speed the scene asks: the filter leaves
     their speed alone (the disk would charge each the other's stopping reach)."""
     dt = 0.05
-    flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=1.0, dt=dt,
-                                    dynamics="double_integrator"))  # fmt: skip
-    disk = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=1.0, dt=dt,
-                                     dynamics="double_integrator", barrier="backup"))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(gamma=10.0, safety_radius=1.0, u_max=1.0, dt=dt, dynamics="double_integrator")
+    )
+    disk = SafetyFilter(
+        FilterConfig(
+            gamma=10.0,
+            safety_radius=1.0,
+            u_max=1.0,
+            dt=dt,
+            dynamics="double_integrator",
+            barrier="backup",
+        )
+    )
     for f, keeps in ((flt, True), (disk, False)):
         p, v = np.array([[0.0, 0.0], [0.0, 1.1]]), np.array([[2.0, 0.0], [2.0, 0.0]])
         for _ in range(200):
@@ -228,8 +253,9 @@ def at_a_big_obstacle(rng, kind, size, where, r, c, dt):
     centre = where * np.array([np.cos(ang + 1.0), np.sin(ang + 1.0)])
     if kind == "wall":
         thick = 0.1 * r
-        obstacles = Obstacles.of(walls=[[centre - 0.5 * size * d, centre + 0.5 * size * d]],
-                                 thickness=thick)  # fmt: skip
+        obstacles = Obstacles.of(
+            walls=[[centre - 0.5 * size * d, centre + 0.5 * size * d]], thickness=thick
+        )
         rho = obstacles.capsules[0, 4]  # the wall's half thickness
         q = centre + rng.uniform(-0.4, 0.4) * size * d + normal * (r + rho)
     else:
@@ -253,8 +279,11 @@ def test_obstacles_up_to_1e7_in_size_and_position_keep_the_qp_feasible(kind, siz
     along the separating direction carried the direction's rounding times the wall's length."""
     rng = np.random.default_rng(int(np.log10(size)) * 7 + int(where > 0))
     r, dt = 1.0, 0.05
-    flt = SafetyFilter(FilterConfig(dynamics="double_integrator", u_max=1.0, safety_radius=2 * r,
-                                    dt=dt, gamma=10.0))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(
+            dynamics="double_integrator", u_max=1.0, safety_radius=2 * r, dt=dt, gamma=10.0
+        )
+    )
     c = bb.braking_capability(np.array([[-1.0, -1.0]]), np.array([[1.0, 1.0]]))[0]
     rounding = 1e-15 * (size + where)
     for _ in range(40):
@@ -263,8 +292,15 @@ def test_obstacles_up_to_1e7_in_size_and_position_keep_the_qp_feasible(kind, siz
         assert seg_obstacle_h(p, v, np.array([r]), np.array([1.0]), dt, caps)[0].min() >= (
             -1e-6 - rounding
         )  # built at h = 0
-        res = flt.filter(p, np.zeros((1, 2)), np.ones(1), velocities=v, radii=np.array([r]),
-                         u_max=np.array([1.0]), obstacles=obstacles)  # fmt: skip
+        res = flt.filter(
+            p,
+            np.zeros((1, 2)),
+            np.ones(1),
+            velocities=v,
+            radii=np.array([r]),
+            u_max=np.array([1.0]),
+            obstacles=obstacles,
+        )
         assert res.feasible[0], (kind, size, where)
         p1, v1 = double_integrator_step(p, v, res.actions, dt)
         h1 = seg_obstacle_h(p1, v1, np.array([r]), np.array([1.0]), dt, caps)[0].min()

@@ -141,17 +141,28 @@ def test_the_serial_and_prange_forms_agree_bit_for_bit(n, e):
     sim = env.sim
     flt, s, u = sim.filters[0], sim.state, sim.nominal_controls()
     bodies = next(iter(flt._default_bodies.values()))
-    args = (s.positions, u, sim.weights.matrix, float(flt.config.gamma), bodies.radii,
-            bodies.lo, bodies.hi)  # fmt: skip
+    args = (
+        s.positions,
+        u,
+        sim.weights.matrix,
+        float(flt.config.gamma),
+        bodies.radii,
+        bodies.lo,
+        bodies.hi,
+    )
     rows = flt.apply(s.positions, u, s.theta, None, sim.weights.matrix, with_rows=True).rows
     nominal, lo, hi, _ = exact._batch(u.reshape(-1, 2), bodies.lo, bodies.hi)
     csr = (nominal, rows.flat_A, rows.flat_b, rows.offsets, lo, hi)
     with threads.using(1):
         for serial, prange, inputs, outputs in (
             (dense._serial, dense._parallel, args, lambda: dense._outputs(e, n)),
-            (exact._solve_csr_serial, exact._solve_csr_parallel, csr,
-             lambda: exact._batch(nominal, lo, hi)[3]),
-        ):  # fmt: skip
+            (
+                exact._solve_csr_serial,
+                exact._solve_csr_parallel,
+                csr,
+                lambda: exact._batch(nominal, lo, hi)[3],
+            ),
+        ):
             a, b = outputs(), outputs()
             serial(*inputs, *a)
             threads.launch(serial, prange, 10**6, *inputs, *b)  # its prange form, one thread

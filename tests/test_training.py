@@ -17,11 +17,26 @@ from rsvo_env.training.evaluation import record_gif, run_episodes, scripted_poli
 from rsvo_env.wrappers.sb3 import SB3VecEnv
 
 SMALL = [
-    "--scenario", "circular_swap", "--set", "env.num_agents=4", "--num-envs", "2",
-    "--set", "env.num_obs_neighbors=3",
-    "--set", "ppo.n_steps=32", "--set", "ppo.batch_size=128", "--set", "validation.every=1024",
-    "--set", "validation.episodes=3", "--set", "checkpoint_every=2048", "--no-progress",
-]  # fmt: skip
+    "--scenario",
+    "circular_swap",
+    "--set",
+    "env.num_agents=4",
+    "--num-envs",
+    "2",
+    "--set",
+    "env.num_obs_neighbors=3",
+    "--set",
+    "ppo.n_steps=32",
+    "--set",
+    "ppo.batch_size=128",
+    "--set",
+    "validation.every=1024",
+    "--set",
+    "validation.episodes=3",
+    "--set",
+    "checkpoint_every=2048",
+    "--no-progress",
+]
 
 
 def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys):
@@ -35,10 +50,18 @@ def test_train_writes_logs_and_a_model_that_loads_and_evaluates(tmp_path, capsys
     with open(run / "progress.csv") as f:
         rows = list(csv.DictReader(f))
     logged = {k for row in rows for k, v in row.items() if v != ""}
-    for key in ("rollout/success_rate", "rollout/completion_time", "rollout/intervention_rate",
-                "rollout/cost", "rollout/infeasible_steps", "rollout/ep_rew_mean",
-                "rollout/episode_cost", "rollout/contact_agent_steps", "eval/success_rate",
-                "eval/episode_cost"):  # fmt: skip
+    for key in (
+        "rollout/success_rate",
+        "rollout/completion_time",
+        "rollout/intervention_rate",
+        "rollout/cost",
+        "rollout/infeasible_steps",
+        "rollout/ep_rew_mean",
+        "rollout/episode_cost",
+        "rollout/contact_agent_steps",
+        "eval/success_rate",
+        "eval/episode_cost",
+    ):
         assert key in logged, key
     # no collision anywhere in training: the logged cost is zero in every row
     assert all(float(r["rollout/collision_steps_total"] or 0) == 0 for r in rows)
@@ -144,8 +167,14 @@ def test_every_scenario_has_a_valid_config_with_gamma_dt_at_most_one():
         env = configs.make_env(cfg, num_envs=1)
         assert env.sim.filters[0].config.gamma * env.scenario.params["dt"] <= 1.0
     names = {p.stem for p in configs.CONFIG_DIR.glob("*.yaml")}
-    assert names == {"circular_swap", "crowd", "doorway", "obstacle_field", "position_swap",
-                     "ramp_merge"}  # fmt: skip
+    assert names == {
+        "circular_swap",
+        "crowd",
+        "doorway",
+        "obstacle_field",
+        "position_swap",
+        "ramp_merge",
+    }
 
 
 def test_validation_and_evaluation_episodes_have_their_own_time_cap(tmp_path):

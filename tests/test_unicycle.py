@@ -62,14 +62,22 @@ def inputs_through_the_step(u, l, dt, k=8):
 def test_bodies_never_overlap_and_inputs_stay_in_bounds(n, steps, l_ratio, scale, gamma):
     p, th, goals, theta, radii = crowd(n, n, scale)
     l, dt = l_ratio * 0.2 * scale, 0.05
-    cfg = FilterConfig(dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX * scale,
-                       u_min=0.0, gamma=gamma, dt=dt)  # fmt: skip
+    cfg = FilterConfig(
+        dynamics="unicycle",
+        lookahead=l,
+        w_max=W_MAX,
+        u_max=V_MAX * scale,
+        u_min=0.0,
+        gamma=gamma,
+        dt=dt,
+    )
     flt = SafetyFilter(cfg)
     I, J = pairs.all_pairs(n)
     worst = np.inf
     for _ in range(steps):
-        res = flt.filter(p, nominal(p, th, goals, l, V_MAX * scale), theta, headings=th,
-                         radii=radii)  # fmt: skip
+        res = flt.filter(
+            p, nominal(p, th, goals, l, V_MAX * scale), theta, headings=th, radii=radii
+        )
         assert res.feasible.all()
         v, w = inputs_through_the_step(res.actions, l, dt)
         tol = 1e-12 * scale
@@ -90,8 +98,9 @@ def test_the_step_is_the_unicycle_under_the_look_ahead_hold():
     u = np.c_[rng.uniform(0, 0.9, 50), rng.uniform(-2, 2, 50)]
     l, dt = 0.15, 0.2
     e = heading_vectors(th)
-    c = np.stack([e[:, 0] * u[:, 0] - e[:, 1] * l * u[:, 1],
-                  e[:, 1] * u[:, 0] + e[:, 0] * l * u[:, 1]], -1)  # fmt: skip
+    c = np.stack(
+        [e[:, 0] * u[:, 0] - e[:, 1] * l * u[:, 1], e[:, 1] * u[:, 0] + e[:, 0] * l * u[:, 1]], -1
+    )
 
     def f(state):
         hp = state[:, 2]
@@ -115,18 +124,28 @@ def test_the_step_is_the_unicycle_under_the_look_ahead_hold():
 
 
 def test_unicycles_stop_at_obstacles():
-    obstacles = Obstacles.of(circles=[(0.0, 0.0, 1.0)], walls=[((3.0, -2.0), (3.0, 2.0))],
-                             thickness=0.2)  # fmt: skip
+    obstacles = Obstacles.of(
+        circles=[(0.0, 0.0, 1.0)], walls=[((3.0, -2.0), (3.0, 2.0))], thickness=0.2
+    )
     l = 0.1
-    flt = SafetyFilter(FilterConfig(dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX,
-                                    gamma=10.0, dt=0.05))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(
+            dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX, gamma=10.0, dt=0.05
+        )
+    )
     p = np.array([[-4.0, 0.05], [6.0, 0.5]])
     th = np.array([0.3, np.pi - 0.2])
     goals = np.array([[4.0, 0.0], [0.0, 0.5]])
     radii = np.array([0.3, 0.4])
     for _ in range(400):
-        res = flt.filter(p, nominal(p, th, goals, l, V_MAX), np.ones(2), headings=th,
-                         radii=radii, obstacles=obstacles)  # fmt: skip
+        res = flt.filter(
+            p,
+            nominal(p, th, goals, l, V_MAX),
+            np.ones(2),
+            headings=th,
+            radii=radii,
+            obstacles=obstacles,
+        )
         assert res.feasible.all()
         p, th = unicycle_step(p, th, res.actions, l, 0.05)
         assert (obstacles.clearance(p, radii) >= -1e-9).all()
@@ -166,9 +185,16 @@ def every_row(flt, p, th, nom, theta, radii, holo):
     q, nom_b, row_bodies, rotation = cfg.model.lift(cfg, p[None], nom[None], bodies, th[None])
     I, J = pairs.all_pairs(n)
     rows = barriers.single_integrator_rows(
-        q[0], flt.pair_weights(theta, None, I, J), I, J, cfg.gamma, row_bodies.radii,
-        row_bodies.lo, row_bodies.hi, cull=False,
-    )  # fmt: skip
+        q[0],
+        flt.pair_weights(theta, None, I, J),
+        I,
+        J,
+        cfg.gamma,
+        row_bodies.radii,
+        row_bodies.lo,
+        row_bodies.hi,
+        cull=False,
+    )
     A = rotate_rows(rows.flat_A, rows.owner, rotation)
     u = exact.solve_csr(nom_b[0], A, rows.flat_b, rows.offsets, bodies.lo, bodies.hi)[0]
     return cfg.model.lower(cfg, u, bodies)
@@ -226,8 +252,11 @@ def test_mixed_crowds_of_single_integrators_and_unicycles(n, steps, scale):
     p, th, goals, theta, radii = crowd(n, n + 1, scale)
     holo = np.arange(n) % 2 == 0
     l, dt = 0.08 * scale, 0.05
-    flt = SafetyFilter(FilterConfig(dynamics="unicycle", lookahead=l, w_max=W_MAX,
-                                    u_max=V_MAX * scale, gamma=20.0, dt=dt))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(
+            dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX * scale, gamma=20.0, dt=dt
+        )
+    )
     I, J = pairs.all_pairs(n)
     worst = np.inf
     for _ in range(steps):
@@ -254,19 +283,20 @@ def test_holonomic_is_checked():
     with pytest.raises(ValueError, match="holonomic must be bools"):
         flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), holonomic=[1, 0])
     with pytest.raises(ValueError, match=r"holonomic has shape \(3,\)"):
-        flt.filter(x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2),
-                   holonomic=np.zeros(3, bool))  # fmt: skip
+        flt.filter(
+            x, np.zeros((2, 2)), np.ones(2), headings=np.zeros(2), holonomic=np.zeros(3, bool)
+        )
     with pytest.raises(ValueError, match="holonomic is for the unicycle"):
-        SafetyFilter(FilterConfig()).filter(x, np.zeros((2, 2)), np.ones(2),
-                                            holonomic=np.zeros(2, bool))  # fmt: skip
+        SafetyFilter(FilterConfig()).filter(
+            x, np.zeros((2, 2)), np.ones(2), holonomic=np.zeros(2, bool)
+        )
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_simulated_unicycle_crowd_behind_the_filter_never_touches(seed):
     from rsvo_env.dynamics.unicycle import heading_vectors as e
 
-    env = rsvo_env.parallel_env("unicycle_crowd", num_agents=12,
-                                                          dt=0.05, max_steps=600)  # fmt: skip
+    env = rsvo_env.parallel_env("unicycle_crowd", num_agents=12, dt=0.05, max_steps=600)
     env.reset(seed=seed, options={"theta": np.linspace(0.5, 8.0, 12)})
     sim = env.unwrapped.sim
     p = sim.scenario.params
@@ -300,8 +330,11 @@ def test_unicycles_of_their_own_speed_limit(n, steps, scale):
     v_max = rng.uniform(0.5, 1.0, n) * V_MAX * scale
     holo = rng.random(n) < 0.3
     l, dt = 0.08 * scale, 0.05
-    flt = SafetyFilter(FilterConfig(dynamics="unicycle", lookahead=l, w_max=W_MAX,
-                                    u_max=V_MAX * scale, gamma=20.0, dt=dt))  # fmt: skip
+    flt = SafetyFilter(
+        FilterConfig(
+            dynamics="unicycle", lookahead=l, w_max=W_MAX, u_max=V_MAX * scale, gamma=20.0, dt=dt
+        )
+    )
     I, J = pairs.all_pairs(n)
     worst, slowed = np.inf, 0
     for _ in range(steps):

@@ -59,8 +59,9 @@ def test_fixed_size_scenarios_refuse_other_counts(name):
     ):
         rsvo_env.parallel_env(name, num_agents=4)
     with pytest.raises(ValueError, match="laid out for exactly 2"):
-        gymnasium.make(f"rsvo/{'PositionSwap' if name == 'position_swap' else 'RampMerge'}-v0",
-                       num_agents=3)  # fmt: skip
+        gymnasium.make(
+            f"rsvo/{'PositionSwap' if name == 'position_swap' else 'RampMerge'}-v0", num_agents=3
+        )
     rsvo_env.parallel_env(name, num_agents=2)
 
 

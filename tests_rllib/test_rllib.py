@@ -18,11 +18,25 @@ from rsvo_env.training.rllib_env import RSVOMultiAgentEnv
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = [
-    "--engine", "rllib", "--set", "env.num_agents=4", "--set", "env.num_obs_neighbors=3",
-    "--set", "rllib.train_batch_size=256", "--set", "rllib.minibatch_size=256",
-    "--set", "rllib.num_epochs=1", "--set", "validation.every=1024",
-    "--set", "validation.episodes=3", "--timesteps", "2048",
-]  # fmt: skip
+    "--engine",
+    "rllib",
+    "--set",
+    "env.num_agents=4",
+    "--set",
+    "env.num_obs_neighbors=3",
+    "--set",
+    "rllib.train_batch_size=256",
+    "--set",
+    "rllib.minibatch_size=256",
+    "--set",
+    "rllib.num_epochs=1",
+    "--set",
+    "validation.every=1024",
+    "--set",
+    "validation.episodes=3",
+    "--timesteps",
+    "2048",
+]
 
 
 def small_cfg():
@@ -102,12 +116,19 @@ def test_a_two_node_cluster_runs_the_env_runners_on_the_worker(tmp_path, capsys)
 
     port = "6391"
     ray_cli("stop", "--force")
-    head = ray_cli("start", "--head", "--node-ip-address=127.0.0.1", f"--port={port}",
-                   "--num-cpus=0", "--include-dashboard=false")  # fmt: skip
+    head = ray_cli(
+        "start",
+        "--head",
+        "--node-ip-address=127.0.0.1",
+        f"--port={port}",
+        "--num-cpus=0",
+        "--include-dashboard=false",
+    )
     assert head.returncode == 0, head.stderr
     try:
-        worker = ray_cli("start", f"--address=127.0.0.1:{port}", "--node-ip-address=127.0.0.1",
-                         "--num-cpus=2")  # fmt: skip
+        worker = ray_cli(
+            "start", f"--address=127.0.0.1:{port}", "--node-ip-address=127.0.0.1", "--num-cpus=2"
+        )
         assert worker.returncode == 0, worker.stderr
         ray.init(address=f"127.0.0.1:{port}")
         nodes = [n for n in ray.nodes() if n["Alive"]]
@@ -126,11 +147,27 @@ def test_a_two_node_cluster_runs_the_env_runners_on_the_worker(tmp_path, capsys)
 def test_sweep_writes_its_table(tmp_path):
     out = tmp_path / "sweep"
     args = [
-        "--set", "env.num_agents=4", "--set", "env.num_obs_neighbors=3",
-        "--set", "rllib.train_batch_size=256", "--set", "rllib.minibatch_size=256",
-        "--set", "rllib.num_epochs=1", "--timesteps", "1000", "--episodes", "3",
-        "--seeds", "0", "--thetas", "paper", "--out", str(out),
-    ]  # fmt: skip
+        "--set",
+        "env.num_agents=4",
+        "--set",
+        "env.num_obs_neighbors=3",
+        "--set",
+        "rllib.train_batch_size=256",
+        "--set",
+        "rllib.minibatch_size=256",
+        "--set",
+        "rllib.num_epochs=1",
+        "--timesteps",
+        "1000",
+        "--episodes",
+        "3",
+        "--seeds",
+        "0",
+        "--thetas",
+        "paper",
+        "--out",
+        str(out),
+    ]
     assert sweep.main(args) == 0
     rows = (out / "sweep.csv").read_text().splitlines()
     assert len(rows) == 1 + 2  # two weightings x one theta assignment x one seed

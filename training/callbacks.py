@@ -147,9 +147,12 @@ class Progress(BaseCallback):
         from tqdm.auto import tqdm
 
         self.start = time.perf_counter()
-        self.bar = tqdm(total=100.0, unit="%", file=self.file, bar_format=(
-            "{percentage:5.1f}%|{bar}| {desc} [{elapsed}<{remaining}]"
-        ))  # fmt: skip
+        self.bar = tqdm(
+            total=100.0,
+            unit="%",
+            file=self.file,
+            bar_format=("{percentage:5.1f}%|{bar}| {desc} [{elapsed}<{remaining}]"),
+        )
 
     def _on_step(self) -> bool:
         self._show(self.num_timesteps)

@@ -229,14 +229,6 @@ def make_parallel(
         cfg["scenario"], render_mode=render_mode, weighting=cfg["weighting"], **env_keywords(cfg)
     )
     if (action or cfg["action"]) == "residual":
-        r = residual_settings(cfg)
-        env = ResidualAction(
-            env,
-            gate_radius=r.gate_radius,
-            residual_right_hand=r.right_hand,
-            residual_scale=r.scale,
-            yield_radius=r.yield_radius,
-            interaction_radius=r.interaction_radius,
-            stall_gate=r.stall_gate,
-        )
+        # the wrapper spells the settings as BatchedEnv does (Residual.env_keywords)
+        env = ResidualAction(env, **residual_settings(cfg).env_keywords())
     return env

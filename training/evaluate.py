@@ -151,9 +151,15 @@ def main(argv: list[str] | None = None, prog: str = "python -m rsvo_env.training
     except ValueError as err:
         p.exit(2, f"{p.prog}: error: {err}\n")
     result = evaluate_loaded(
-        policy, cfg, args.model, args.episodes, args.seed, args.compare_scripted, args.gif,
+        policy,
+        cfg,
+        args.model,
+        args.episodes,
+        args.seed,
+        args.compare_scripted,
+        args.gif,
         args.weighting,
-    )  # fmt: skip
+    )
     print(
         f"{args.episodes} episodes, seeds {args.seed}..{args.seed + args.episodes - 1}, "
         f"each capped at {result['max_steps']} steps"

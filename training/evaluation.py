@@ -20,9 +20,18 @@ from rsvo_env.training.config import make_env, make_parallel
 Policy = Callable[[NDArray[np.float32], Any], NDArray]
 # the per-episode records an evaluation returns, one array of length `episodes` each
 FIELDS = (
-    "success", "completion_time", "collision_steps", "min_distance", "infeasible",
-    "return", "intervention", "intervention_rate", "steps", "arrived", "cost",
-)  # fmt: skip
+    "success",
+    "completion_time",
+    "collision_steps",
+    "min_distance",
+    "infeasible",
+    "return",
+    "intervention",
+    "intervention_rate",
+    "steps",
+    "arrived",
+    "cost",
+)
 
 
 def intervened(intervention: Any, u_max: float) -> Any:

@@ -194,10 +194,18 @@ class Log:
     ``validation.csv`` as the SB3 path writes it."""
 
     FIELDS = (
-        "agent_steps", "seconds", "episode_return_mean", "success_rate", "completion_time",
-        "cost", "infeasible_steps", "intervention", "eval/success_rate", "eval/completion_time",
+        "agent_steps",
+        "seconds",
+        "episode_return_mean",
+        "success_rate",
+        "completion_time",
+        "cost",
+        "infeasible_steps",
+        "intervention",
+        "eval/success_rate",
+        "eval/completion_time",
         "eval/collisions",
-    )  # fmt: skip
+    )
 
     def __init__(self, out: Path) -> None:
         self.out = out

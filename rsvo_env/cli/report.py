@@ -63,16 +63,35 @@ def position_swap(ps: dict) -> list[str]:
         "",
     ]
     rows = [
-        [fmt(r["R"], 0), f"{r['w1']:.1f} / {1 - r['w1']:.1f}", *r["distance"], *r["speed"],
-         r["ratio"], r["onset"], r["completed"], r["min_distance"], r["collisions"]]
+        [
+            fmt(r["R"], 0),
+            f"{r['w1']:.1f} / {1 - r['w1']:.1f}",
+            *r["distance"],
+            *r["speed"],
+            r["ratio"],
+            r["onset"],
+            r["completed"],
+            r["min_distance"],
+            r["collisions"],
+        ]
         for r in ps["rows"]
-    ]  # fmt: skip
+    ]
     lines += table(
-        ["R_safe", "omega_1 / omega_2", "dist. agent 1 [m]", "dist. agent 2 [m]", "speed 1 [m/s]",
-         "speed 2 [m/s]", "larger-omega / other", "meet step", "completed step",
-         "min distance [m]", "collision steps"],
+        [
+            "R_safe",
+            "omega_1 / omega_2",
+            "dist. agent 1 [m]",
+            "dist. agent 2 [m]",
+            "speed 1 [m/s]",
+            "speed 2 [m/s]",
+            "larger-omega / other",
+            "meet step",
+            "completed step",
+            "min distance [m]",
+            "collision steps",
+        ],
         rows,
-    )  # fmt: skip
+    )
     return lines + [
         f"The agent with the larger omega travels farther before the agents meet in every "
         f"unequal case: ratio {ps['ratio_min']:.3f} to {ps['ratio_max']:.3f}.",
@@ -98,22 +117,44 @@ def ramp_merge(rm: dict, plan: Plan) -> list[str]:
         "",
     ]
     rows = [
-        [s, b, a["runs"], f"{a['egoist_first']} / {a['unequal']}", a["unsafe"], a["worst"],
-         a["infeasible"]]
+        [
+            s,
+            b,
+            a["runs"],
+            f"{a['egoist_first']} / {a['unequal']}",
+            a["unsafe"],
+            a["worst"],
+            a["infeasible"],
+        ]
         for (s, b), a in rm["summary"].items()
-    ]  # fmt: skip
+    ]
     safe = f"{p['safety_radius']:g} m"
     lines += table(
-        ["split", "barrier", "runs", "egoist merges first", f"runs below {safe}",
-         "worst min distance [m]", "infeasible agent-steps"],
+        [
+            "split",
+            "barrier",
+            "runs",
+            "egoist merges first",
+            f"runs below {safe}",
+            "worst min distance [m]",
+            "infeasible agent-steps",
+        ],
         rows,
-    )  # fmt: skip
+    )
     lines += [f"### Default setting ({p['lane_angle_deg']:g}°, gamma {p['gamma']:g})", ""]
     lines += table(
-        ["split", "barrier", "case", "first through merge", "V1 step", "V2 step",
-         "min distance [m]", "infeasible agent-steps"],
+        [
+            "split",
+            "barrier",
+            "case",
+            "first through merge",
+            "V1 step",
+            "V2 step",
+            "min distance [m]",
+            "infeasible agent-steps",
+        ],
         rm["detail"],
-    )  # fmt: skip
+    )
     return lines + ["![ramp merge](ramp_merge.png)", ""]
 
 
@@ -137,14 +178,34 @@ def circular(cg: dict, plan: Plan) -> list[str]:
     for name, out, paper in cases:
         o, r, c = out["deadlock_onset"], out["deadlock_resolved"], out["completed"]
         rows.append(
-            [name, o, paper[0], r, paper[1], c, paper[2], out["min_distance"],
-             out["n_collision_steps"], out["n_infeasible"]]
-        )  # fmt: skip
+            [
+                name,
+                o,
+                paper[0],
+                r,
+                paper[1],
+                c,
+                paper[2],
+                out["min_distance"],
+                out["n_collision_steps"],
+                out["n_infeasible"],
+            ]
+        )
     lines += table(
-        ["run", "deadlock onset", "paper", "resolved", "paper", "completed", "paper",
-         "min distance [m]", "collision steps", "infeasible agent-steps"],
+        [
+            "run",
+            "deadlock onset",
+            "paper",
+            "resolved",
+            "paper",
+            "completed",
+            "paper",
+            "min distance [m]",
+            "collision steps",
+            "infeasible agent-steps",
+        ],
         rows,
-    )  # fmt: skip
+    )
     lines += [
         f"Resolution efficiency gain {pct(cg['resolution_gain'])} (paper 46.8 %); completion gain "
         f"{pct(cg['completion_gain'])} (paper 33 %).",
@@ -186,10 +247,16 @@ def who_benefits(wb: dict, n_sets: int) -> list[str]:
         "",
     ]
     return lines + table(
-        ["per agent", "egoists mean", "egoists median", "altruists mean", "altruists median",
-         "rank correlation with theta"],
+        [
+            "per agent",
+            "egoists mean",
+            "egoists median",
+            "altruists mean",
+            "altruists median",
+            "rank correlation with theta",
+        ],
         [[name, *wb[name]] for name in MEASURES],
-    )  # fmt: skip
+    )
 
 
 def differences(ps: dict, rm: dict, cg: dict) -> list[str]:
@@ -240,16 +307,28 @@ def readme_block(ps: dict, rm: dict, cg: dict, diff: list[str], rel: Path | str)
     o_s, r_s, c_s = cg["sym"]
     o_a, r_a, c_a = cg["asym"]
     main = table(
-        ["circular game", "deadlock onset", "resolved", "completed", "resolution gain",
-         "completion gain"],
+        [
+            "circular game",
+            "deadlock onset",
+            "resolved",
+            "completed",
+            "resolution gain",
+            "completion gain",
+        ],
         [
             ["symmetric (ours)", o_s, r_s, c_s, "", ""],
             ["symmetric (paper)", *PAPER["sym"], "", ""],
-            ["asymmetric (ours)", o_a, r_a, c_a, pct(cg["resolution_gain"]),
-             pct(cg["completion_gain"])],
+            [
+                "asymmetric (ours)",
+                o_a,
+                r_a,
+                c_a,
+                pct(cg["resolution_gain"]),
+                pct(cg["completion_gain"]),
+            ],
             ["asymmetric (paper)", *PAPER["asym"], "46.8 %", "33 %"],
         ],
-    )  # fmt: skip
+    )
     sets = table(
         ["random theta sets", "sets", "mean", "median", "std", "min", "max", "paper"],
         [
@@ -262,14 +341,22 @@ def readme_block(ps: dict, rm: dict, cg: dict, diff: list[str], rel: Path | str)
         ],
     )
     ramp = table(
-        ["ramp merge, braking barrier", "egoist merges first", "runs below 5 m",
-         "infeasible agent-steps"],
         [
-            [f"{split} split", f"{a['egoist_first']} / {a['unequal']}", a["unsafe"],
-             a["infeasible"]]
+            "ramp merge, braking barrier",
+            "egoist merges first",
+            "runs below 5 m",
+            "infeasible agent-steps",
+        ],
+        [
+            [
+                f"{split} split",
+                f"{a['egoist_first']} / {a['unequal']}",
+                a["unsafe"],
+                a["infeasible"],
+            ]
             for split, a in ((s, rm["summary"][(s, "braking")]) for s in SPLITS)
         ],
-    )  # fmt: skip
+    )
     return [
         f"Produced by `rsvo reproduce` (all tables, and the run's wall time: `{rel}/paper.md`).",
         "",

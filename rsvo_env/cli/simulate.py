@@ -31,8 +31,12 @@ from rsvo_env.util.scene_file import read_scene
 from rsvo_env.util.validation import check_flag, check_seed
 
 # the run's own settings a scene file may hold too, and the flag that sets each
-RUN_FLAGS = {"theta": "--theta", "weighting": "--weighting", "seed": "--seed",
-             "safety_filter": "--no-filter"}  # fmt: skip
+RUN_FLAGS = {
+    "theta": "--theta",
+    "weighting": "--weighting",
+    "seed": "--seed",
+    "safety_filter": "--no-filter",
+}
 
 
 def run_settings(args: argparse.Namespace, scene: dict[str, Any]) -> dict[str, Any]:
@@ -52,11 +56,16 @@ def run_settings(args: argparse.Namespace, scene: dict[str, Any]) -> dict[str, A
             flags[key] = scene.pop(key)
     with user_input():
         seed = check_seed(0 if flags["seed"] is None else flags["seed"], "seed")
-        safety_filter = check_flag(True if flags["safety_filter"] is None else
-                                   flags["safety_filter"], "safety_filter")  # fmt: skip
+        safety_filter = check_flag(
+            True if flags["safety_filter"] is None else flags["safety_filter"], "safety_filter"
+        )
     weighting = "asymmetric" if flags["weighting"] is None else flags["weighting"]
-    return {"theta": flags["theta"], "weighting": weighting, "seed": seed,
-            "safety_filter": safety_filter}  # fmt: skip
+    return {
+        "theta": flags["theta"],
+        "weighting": weighting,
+        "seed": seed,
+        "safety_filter": safety_filter,
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -92,8 +101,9 @@ def main(argv: list[str] | None = None) -> int:
         help="custom: your scene, a YAML or JSON mapping of its keywords (starts, goals, radii, "
         "circles, walls, thickness, dynamics, u_max, a_max, ...; docs/scenarios.md)",
     )
-    ap.add_argument("--seed", type=count(0), default=argparse.SUPPRESS,
-                    help="seed of the episode (default: 0)")  # fmt: skip
+    ap.add_argument(
+        "--seed", type=count(0), default=argparse.SUPPRESS, help="seed of the episode (default: 0)"
+    )
     ap.add_argument(
         "--dynamics",
         choices=dynamics.NAMES,
@@ -105,8 +115,12 @@ def main(argv: list[str] | None = None) -> int:
         metavar="N",
         help="how many agents, in the scenes laid out for any number (default: the scene's)",
     )
-    ap.add_argument("--max-steps", type=count(1), metavar="STEPS",
-                    help="the episode's step cap (default: the scene's)")  # fmt: skip
+    ap.add_argument(
+        "--max-steps",
+        type=count(1),
+        metavar="STEPS",
+        help="the episode's step cap (default: the scene's)",
+    )
     ap.add_argument("--gif", type=Path, help="write an animated GIF here (.gif)")
     ap.add_argument("--png", type=Path, help="write a trajectory figure here (.png)")
     args = ap.parse_args(argv)
@@ -120,8 +134,12 @@ def main(argv: list[str] | None = None) -> int:
         with user_input():
             scene = read_scene(args.scene)
     # the scene's own keywords given by flag, each at most once
-    for key, flag in (("nominal", "--nominal"), ("dynamics", "--dynamics"),
-                      ("num_agents", "--num-agents"), ("max_steps", "--max-steps")):  # fmt: skip
+    for key, flag in (
+        ("nominal", "--nominal"),
+        ("dynamics", "--dynamics"),
+        ("num_agents", "--num-agents"),
+        ("max_steps", "--max-steps"),
+    ):
         value = getattr(args, key)
         if value is not None:
             if key in scene:

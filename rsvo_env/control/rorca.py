@@ -60,18 +60,31 @@ def _half_planes(x, v, radii, I, J, share, tau, dt, parked, seen):
             me, other = (I[p], J[p]) if side == 0 else (J[p], I[p])
             vo = seen[other] if parked[me] and not parked[other] else v[other]
             mine = (x[me, 0], x[me, 1], v[me, 0], v[me, 1])
-            row = plane(mine, (x[other, 0], x[other, 1]), (vo[0], vo[1]),
-                        radii[me] + radii[other], share[p, side], share[p, 1 - side],
-                        1.0 / tau, dt)  # fmt: skip
+            row = plane(
+                mine,
+                (x[other, 0], x[other, 1]),
+                (vo[0], vo[1]),
+                radii[me] + radii[other],
+                share[p, side],
+                share[p, 1 - side],
+                1.0 / tau,
+                dt,
+            )
             k = p + side * P
             A[k, 0], A[k, 1], b[k] = row
     return A, b
 
 
 def arrival_capped(
-    preferred: NDArray, positions: NDArray, goals: NDArray, radii: NDArray, tau: float,
-    I: NDArray[np.int64], J: NDArray[np.int64], held: NDArray[np.bool_] | None = None,
-) -> NDArray[np.float64]:  # fmt: skip
+    preferred: NDArray,
+    positions: NDArray,
+    goals: NDArray,
+    radii: NDArray,
+    tau: float,
+    I: NDArray[np.int64],
+    J: NDArray[np.int64],
+    held: NDArray[np.bool_] | None = None,
+) -> NDArray[np.float64]:
     """``preferred`` (M, 2) scaled down to speed at most ``ARRIVE |goal - x| / tau`` where the
     look-ahead ``|preferred| tau`` passes the goal by more than the gap between the goal and a
     neighbour's body (pairs I, J; flat (M, 2) positions and goals, radii (M,)); with ``held``
@@ -81,8 +94,17 @@ def arrival_capped(
     f = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
     hold = np.ones(M, dtype=np.bool_) if held is None else np.ascontiguousarray(held)
     out = np.empty((M, 2))
-    _cap_pairs(f(positions), f(goals), f(preferred), f(radii), np.asarray(I, np.int64),
-               np.asarray(J, np.int64), float(tau), hold, out)  # fmt: skip
+    _cap_pairs(
+        f(positions),
+        f(goals),
+        f(preferred),
+        f(radii),
+        np.asarray(I, np.int64),
+        np.asarray(J, np.int64),
+        float(tau),
+        hold,
+        out,
+    )
     return out
 
 
@@ -104,9 +126,12 @@ def _cap_pairs(x, g, pref, r, I, J, tau, held, out):
 
 
 def goal_blocked(
-    positions: NDArray, goals: NDArray, radii: NDArray, held: NDArray[np.bool_],
+    positions: NDArray,
+    goals: NDArray,
+    radii: NDArray,
+    held: NDArray[np.bool_],
     reach: float = GOAL_REACH,
-) -> NDArray[np.bool_]:  # fmt: skip
+) -> NDArray[np.bool_]:
     """(...,) the agents ``held`` short of a goal within ``reach`` of their own radii
     (``radii``; at 3, a goal up to a body's width beyond the agent's own; at 0, none), which
     R-ORCA treats as parked. A neighbour's body may block such a goal, and an agent pressing
@@ -118,8 +143,14 @@ def goal_blocked(
     rows = lambda a: np.ascontiguousarray(np.broadcast_to(a, shape + (2,)), np.float64)  # noqa: E731
     each = lambda a, t: np.ascontiguousarray(np.broadcast_to(a, shape), t).reshape(-1)  # noqa: E731
     out = np.empty(int(np.prod(shape)), np.bool_)
-    _blocked_all(rows(positions).reshape(-1, 2), rows(goals).reshape(-1, 2),
-                 each(radii, np.float64), each(held, np.bool_), float(reach), out)  # fmt: skip
+    _blocked_all(
+        rows(positions).reshape(-1, 2),
+        rows(goals).reshape(-1, 2),
+        each(radii, np.float64),
+        each(held, np.bool_),
+        float(reach),
+        out,
+    )
     return out.reshape(shape)
 
 

@@ -138,8 +138,7 @@ def _stage_serial(n, motion, W, rules, settings, pref, park, out):
     M = motion[0].shape[0]
     _caps(0, M, n, motion, rules, settings[2], settings[4], pref, park)
     space = scratch(n - 1, settings[0])
-    _agents(0, M, n, motion[0], motion[1], pref, motion[4], W, rules[2], park, settings, space,
-            out)  # fmt: skip
+    _agents(0, M, n, motion[0], motion[1], pref, motion[4], W, rules[2], park, settings, space, out)
 
 
 @njit(cache=True, parallel=True)
@@ -149,12 +148,34 @@ def _stage_parallel(n, motion, W, rules, settings, pref, park, out):
     M = x.shape[0]
     blocks = (M + CHUNK - 1) // CHUNK
     for c in prange(blocks):
-        _caps(c * CHUNK, min(M, (c + 1) * CHUNK), n, motion, rules, settings[2], settings[4],
-              pref, park)  # fmt: skip
+        _caps(
+            c * CHUNK,
+            min(M, (c + 1) * CHUNK),
+            n,
+            motion,
+            rules,
+            settings[2],
+            settings[4],
+            pref,
+            park,
+        )
     for c in prange(blocks):
         space = scratch(n - 1, settings[0])
-        _agents(c * CHUNK, min(M, (c + 1) * CHUNK), n, x, v, pref, r, W, rules[2], park,
-                settings, space, out)  # fmt: skip
+        _agents(
+            c * CHUNK,
+            min(M, (c + 1) * CHUNK),
+            n,
+            x,
+            v,
+            pref,
+            r,
+            W,
+            rules[2],
+            park,
+            settings,
+            space,
+            out,
+        )
 
 
 def stage(
@@ -169,6 +190,7 @@ def stage(
     W = np.ascontiguousarray(omega, dtype=np.float64).reshape(-1, n)
     M = motion[0].shape[0]
     pref, park, out = np.empty((M, 2)), np.empty(M, np.bool_), np.empty((M, 2))
-    threads.launch(_stage_serial, _stage_parallel, M, n, motion, W, rules, settings, pref, park,
-                   out)  # fmt: skip
+    threads.launch(
+        _stage_serial, _stage_parallel, M, n, motion, W, rules, settings, pref, park, out
+    )
     return out

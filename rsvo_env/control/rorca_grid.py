@@ -77,8 +77,9 @@ def _gather(perm, motion, theta, parked, held, tied, reach, goal_held):
         xs[s, 0], xs[s, 1], vs[s, 0], vs[s, 1] = x[a, 0], x[a, 1], v[a, 0], v[a, 1]
         gs[s, 0], gs[s, 1], ps[s, 0], ps[s, 1] = g[a, 0], g[a, 1], pref0[a, 0], pref0[a, 1]
         rs[s], ths[s], holds[s] = r[a], theta[a], held[a]
-        parks[s] = counts_parked(tied, parked[a], (x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a],
-                                 goal_held[a], reach)  # fmt: skip
+        parks[s] = counts_parked(
+            tied, parked[a], (x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a], goal_held[a], reach
+        )
     return xs, vs, gs, ps, rs, ths, parks, holds
 
 
@@ -263,28 +264,46 @@ def _passes(n, motion, theta, rules, W, symmetric, settings, out):
     keep = FIRST_WIDTH if K < 0 else K
     lists, within = _lists(M, keep)
     for c in prange(blocks):
-        _list_block(c * CHUNK, min(M, (c + 1) * CHUNK), n, data, index, settings, keep, lists,
-                    within)  # fmt: skip
+        _list_block(
+            c * CHUNK, min(M, (c + 1) * CHUNK), n, data, index, settings, keep, lists, within
+        )
     if K < 0 and M > 0 and within.max() > keep:
         keep = within.max()
         lists, within = _lists(M, keep)
         for c in prange(blocks):
-            _list_block(c * CHUNK, min(M, (c + 1) * CHUNK), n, data, index, settings, keep,
-                        lists, within)  # fmt: skip
+            _list_block(
+                c * CHUNK, min(M, (c + 1) * CHUNK), n, data, index, settings, keep, lists, within
+            )
     weight = np.empty((M, lists[1].shape[1], 2))
     for c in prange(blocks):
         _weigh_block(c * CHUNK, min(M, (c + 1) * CHUNK), n, index[0], data[5], lists, W, weight)
     weighting = (weight, symmetric, W.shape[0] == 0)
     for c in prange(blocks):
         space = scratch(lists[1].shape[1], lists[1].shape[1])
-        _solve_block(c * CHUNK, min(M, (c + 1) * CHUNK), n, index[0], data, lists, weighting,
-                     rules[2], settings, space, out)  # fmt: skip
+        _solve_block(
+            c * CHUNK,
+            min(M, (c + 1) * CHUNK),
+            n,
+            index[0],
+            data,
+            lists,
+            weighting,
+            rules[2],
+            settings,
+            space,
+            out,
+        )
 
 
 def stage(
-    n: int, motion: tuple, theta: NDArray, symmetric: NDArray[np.bool_], omega: NDArray | None,
-    rules: tuple, settings: tuple,
-) -> NDArray[np.float64]:  # fmt: skip
+    n: int,
+    motion: tuple,
+    theta: NDArray,
+    symmetric: NDArray[np.bool_],
+    omega: NDArray | None,
+    rules: tuple,
+    settings: tuple,
+) -> NDArray[np.float64]:
     """R-ORCA's velocities (E * n, 2), clipped to the speed limit, for envs of ``n`` agents:
     ``motion`` (x, v, goals, preferred, radii), flat (E * n, ...); the weights from the matrices
     ``omega`` (E, n, n) where given, else from the scores ``theta`` (E, n), 1/2 in the
@@ -300,8 +319,16 @@ def stage(
     th = np.ascontiguousarray(theta, dtype=np.float64).reshape(M)
     K, u_max, tau, dt, cut = settings
     out = np.empty((M, 2))
-    args = (n, motion, th, rules, W, np.ascontiguousarray(symmetric, dtype=np.bool_),
-            (int(K), float(u_max), float(tau), float(dt), float(cut)), out)  # fmt: skip
+    args = (
+        n,
+        motion,
+        th,
+        rules,
+        W,
+        np.ascontiguousarray(symmetric, dtype=np.bool_),
+        (int(K), float(u_max), float(tau), float(dt), float(cut)),
+        out,
+    )
     if threads.parallel(M):
         threads.launch(_stage_serial, _stage, M, *args)
     else:  # a parallel region costs its launch even on one thread

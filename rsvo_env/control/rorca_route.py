@@ -52,8 +52,7 @@ def routed(
     x, v, g, pref = f(positions), f(velocities), f(goals), f(preferred)
     shape = pref.shape
     if not (x.shape == v.shape == g.shape == shape and 2 <= len(shape) <= 3 and shape[-1] == 2):
-        shapes = {"positions": x.shape, "velocities": v.shape, "goals": g.shape,
-                  "preferred": shape}  # fmt: skip
+        shapes = {"positions": x.shape, "velocities": v.shape, "goals": g.shape, "preferred": shape}
         raise ValueError(f"routed: {shapes} must be one shape, (E, N, 2) or (N, 2)")
     if np.shape(at_goal) != shape[:-1]:
         raise ValueError(f"routed: at_goal has shape {np.shape(at_goal)}, expected {shape[:-1]}")
@@ -61,9 +60,16 @@ def routed(
     E = 1 if x.ndim == 2 else x.shape[0]
     n = x.shape[-2]
     out = pref.reshape(E, n, 2).copy()
-    _route(x.reshape(E, n, 2), v.reshape(E, n, 2), g.reshape(E, n, 2),
-           np.ascontiguousarray(at_goal, np.bool_).reshape(E, n), scale, SLOW * speed,
-           *_HEADINGS, out)  # fmt: skip
+    _route(
+        x.reshape(E, n, 2),
+        v.reshape(E, n, 2),
+        g.reshape(E, n, 2),
+        np.ascontiguousarray(at_goal, np.bool_).reshape(E, n),
+        scale,
+        SLOW * speed,
+        *_HEADINGS,
+        out,
+    )
     return out.reshape(shape)
 
 
@@ -120,8 +126,9 @@ def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
             if dist <= look:
                 continue
             ux, uy = dx / dist, dy / dist
-            ahead = _count(xs, start, grid, x[e, i, 0] + look * ux, x[e, i, 1] + look * uy,
-                           probe, n)  # fmt: skip
+            ahead = _count(
+                xs, start, grid, x[e, i, 0] + look * ux, x[e, i, 1] + look * uy, probe, n
+            )
             if ahead < CROWDED:
                 continue
             best, cost = 0, float(ahead)
@@ -132,8 +139,9 @@ def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
                 if need <= 0.0:
                     continue
                 limit = int(np.ceil(need))
-                c = _count(xs, start, grid, x[e, i, 0] + look * hx, x[e, i, 1] + look * hy,
-                           probe, limit)  # fmt: skip
+                c = _count(
+                    xs, start, grid, x[e, i, 0] + look * hx, x[e, i, 1] + look * hy, probe, limit
+                )
                 if c < limit and c + TURN_COST * degrees[t] < cost:
                     best, cost = t, c + TURN_COST * degrees[t]
             px, py = out[e, i, 0], out[e, i, 1]

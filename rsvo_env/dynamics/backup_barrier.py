@@ -218,8 +218,9 @@ def backup_rows(
     return rows, obstacle_h
 
 
-def binding(A: NDArray, b: NDArray, owner: NDArray, box_lo: NDArray, box_hi: NDArray,
-            cull: bool) -> NDArray[np.bool_]:  # fmt: skip
+def binding(
+    A: NDArray, b: NDArray, owner: NDArray, box_lo: NDArray, box_hi: NDArray, cull: bool
+) -> NDArray[np.bool_]:
     """Which rows to keep: those that can bind over their agent's trust box ``[box_lo,
     box_hi]`` (every row without ``cull``; the trust rows keep the solution inside the box).
     A body at another's centre (or on a wall's core) has no direction to keep away along: its
@@ -262,8 +263,15 @@ def obstacle_slots(positions: NDArray, capsules: NDArray, n: int):
     return agent, caps[agent // n, slot], near, -1 - slot
 
 
-def kept_rows(M: int, rows: tuple, keep: NDArray | None, trust: tuple | None, pair_h: NDArray,
-              n_pairs: int, examined: int | None = None) -> Rows:  # fmt: skip
+def kept_rows(
+    M: int,
+    rows: tuple,
+    keep: NDArray | None,
+    trust: tuple | None,
+    pair_h: NDArray,
+    n_pairs: int,
+    examined: int | None = None,
+) -> Rows:
     """The barrier's rows (owner, A, b, neighbour, h) where ``keep`` (None: ``rows`` are the
     kept ones, of ``examined``), then each agent's trust rows (``_trust_rows``, None in
     continuous time), stored by agent."""
@@ -298,8 +306,9 @@ def _trust_rows(beta, rho, lo, hi, h_min, M, cull):
     return agent[keep], A[keep], b[keep], agent[keep], h_min[agent[keep]]
 
 
-def _trust(t: AgentTerms, owner: NDArray, A: NDArray, tau: NDArray, M: int,
-           dt: float) -> tuple[NDArray, NDArray]:  # fmt: skip
+def _trust(
+    t: AgentTerms, owner: NDArray, A: NDArray, tau: NDArray, M: int, dt: float
+) -> tuple[NDArray, NDArray]:
     """Each agent's trust radius from its smallest slack and the rows' right sides (eq.
     ``row``)."""
     tau_min = np.full(M, np.inf)
@@ -362,8 +371,9 @@ def backup_radii(
     return radius_beyond(omega_floor, radii, L, S, rate)
 
 
-def radius_beyond(omega_floor: NDArray, radii: NDArray, L: NDArray, S: NDArray,
-                  rate: float) -> NDArray[np.float64]:  # fmt: skip
+def radius_beyond(
+    omega_floor: NDArray, radii: NDArray, L: NDArray, S: NDArray, rate: float
+) -> NDArray[np.float64]:
     """The culling radius of a barrier whose h is at least ``|d| - (r_i + r_max) - L_i -
     L_max`` and whose rows of agent i cannot bind once their share ``omega rate h`` covers
     ``S_i``: ``r_i + r_max + L_i + L_max + S_i / (omega_floor rate)`` per weight floor

@@ -312,10 +312,12 @@ def double_integrator_rows(
                 # allows along dp without breaking its share of that row, so the share it is
                 # given never needs a corner the row forbids (docs/double_integrator.md)
                 k, (A_t, s_ti, s_tj) = keep_sign, tangential
-                cap_i[k] = support_within(dp[k], lo_i[k] if own else lo, hi_i[k] if own else hi,
-                                          A_t, s_ti)  # fmt: skip
-                cap_j[k] = support_within(-dp[k], lo_j[k] if own else lo, hi_j[k] if own else hi,
-                                          -A_t, s_tj)  # fmt: skip
+                cap_i[k] = support_within(
+                    dp[k], lo_i[k] if own else lo, hi_i[k] if own else hi, A_t, s_ti
+                )
+                cap_j[k] = support_within(
+                    -dp[k], lo_j[k] if own else lo, hi_j[k] if own else hi, -A_t, s_tj
+                )
             unrecoverable = exists & (finite_rhs < -(cap_i + cap_j))
             clipped = np.clip(s_i, -cap_i, finite_rhs + cap_j)
             capped = exists & ~unrecoverable & (clipped != s_i)

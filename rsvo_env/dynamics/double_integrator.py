@@ -179,28 +179,50 @@ class DoubleIntegrator(Dynamics):
         if cfg.barrier in BACKED:
             E, n = velocities.shape[:2]
             return _backed(cfg.barrier)[1](
-                omega_floor, velocities, cfg.gamma, cfg.dt, bodies.radii.reshape(E, n),
-                bodies.lo.reshape(E, n, 2), bodies.hi.reshape(E, n, 2),
+                omega_floor,
+                velocities,
+                cfg.gamma,
+                cfg.dt,
+                bodies.radii.reshape(E, n),
+                bodies.lo.reshape(E, n, 2),
+                bodies.hi.reshape(E, n, 2),
                 bodies.speed.reshape(E, n),
-            )  # fmt: skip
+            )
         if bodies.uniform:
             return double_integrator_radii(
-                omega_floor, velocities, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi,
-                cfg.barrier, cfg.gamma2, cfg.dt,
-            )  # fmt: skip
+                omega_floor,
+                velocities,
+                cfg.gamma,
+                cfg.safety_radius,
+                cfg.lo,
+                cfg.hi,
+                cfg.barrier,
+                cfg.gamma2,
+                cfg.dt,
+            )
         # bodies and boxes of their own: the radius of the worst pair bounds every pair's
         # (it grows with Ds and U and shrinks with A, docs/double_integrator.md)
         from rsvo_env.dynamics.barriers import braking_capability
 
         a = braking_capability(bodies.lo, bodies.hi)
         worst = WorstPair(
-            A=2.0 * float(a.min()), U=float(bodies.speed.max()),
-            Ds_min=2.0 * float(bodies.radii.min()), a_top=float(a.max()),
-        )  # fmt: skip
+            A=2.0 * float(a.min()),
+            U=float(bodies.speed.max()),
+            Ds_min=2.0 * float(bodies.radii.min()),
+            a_top=float(a.max()),
+        )
         return double_integrator_radii(
-            omega_floor, velocities, cfg.gamma, 2.0 * float(bodies.radii.max()), cfg.lo, cfg.hi,
-            cfg.barrier, cfg.gamma2, cfg.dt, worst,
-        )  # fmt: skip
+            omega_floor,
+            velocities,
+            cfg.gamma,
+            2.0 * float(bodies.radii.max()),
+            cfg.lo,
+            cfg.hi,
+            cfg.barrier,
+            cfg.gamma2,
+            cfg.dt,
+            worst,
+        )
 
     def reach(self, params: dict[str, Any], limit: float, horizon: float) -> tuple[float, float]:
         v0 = float(params.get("v0", 0.0))

@@ -95,5 +95,11 @@ def double_integrator_obstacle_rows(
     np.add.at(offsets, owner + 1, 1)
     min_h = np.full(M, np.inf)
     np.minimum.at(min_h, agent, np.where(np.isfinite(h), h, -np.inf))
-    return (np.cumsum(offsets), np.ascontiguousarray(A_all[order]), b_all[order], h_all[order],
-            which[order].astype(np.int64), min_h)  # fmt: skip
+    return (
+        np.cumsum(offsets),
+        np.ascontiguousarray(A_all[order]),
+        b_all[order],
+        h_all[order],
+        which[order].astype(np.int64),
+        min_h,
+    )

@@ -81,8 +81,20 @@ def segment_rows(
     rate = gamma if dt is None else gamma * dt
     P = len(I)
     e, sigma_p, h = np.empty((2 * P, 2)), np.empty(2 * P), np.empty(P)
-    _pair_terms(np.ascontiguousarray(positions), I, J, reach, t.L, radii,
-                np.ascontiguousarray(weights), rate, SETTLE, e, sigma_p, h)  # fmt: skip
+    _pair_terms(
+        np.ascontiguousarray(positions),
+        I,
+        J,
+        reach,
+        t.L,
+        radii,
+        np.ascontiguousarray(weights),
+        rate,
+        SETTLE,
+        e,
+        sigma_p,
+        h,
+    )
     owner, normals, shares = [I, J], [e], [sigma_p]
     hs, others = [h, h], [J, I]
     obstacle_h = None
@@ -112,9 +124,18 @@ def segment_rows(
         return kept_rows(M, (own, A, b, others_all, h_all), keep, None, h, len(I)), obstacle_h
     terms = (t.unit, t.travel, t.spare, t.speed, t.c, np.ascontiguousarray(t.beta), t.rho_full)
     rho, h_min, *kept = _sampled_rows(
-        own, np.ascontiguousarray(e_all), sigma, h_all, others_all, *terms,
-        np.ascontiguousarray(lo), np.ascontiguousarray(hi), dt, TRUST_SHRINK, cull,
-    )  # fmt: skip
+        own,
+        np.ascontiguousarray(e_all),
+        sigma,
+        h_all,
+        others_all,
+        *terms,
+        np.ascontiguousarray(lo),
+        np.ascontiguousarray(hi),
+        dt,
+        TRUST_SHRINK,
+        cull,
+    )
     trust = _trust_rows(t.beta, rho, lo, hi, h_min, M, cull)
     return kept_rows(M, tuple(kept), None, trust, h, len(I), 2 * len(own)), obstacle_h
 
@@ -130,8 +151,9 @@ def _pair_terms(positions, I, J, reach, L, radii, weights, rate, settle, e, sigm
     for k in range(P):
         i, j = I[k], J[k]
         dx, dy = positions[i, 0] - positions[j, 0], positions[i, 1] - positions[j, 1]
-        nx, ny, bound = separate(dx, dy, dx + reach[i, 0], dy + reach[i, 1], 0.0, 0.0,
-                                 reach[j, 0], reach[j, 1], dx, dy)  # fmt: skip
+        nx, ny, bound = separate(
+            dx, dy, dx + reach[i, 0], dy + reach[i, 1], 0.0, 0.0, reach[j, 0], reach[j, 1], dx, dy
+        )
         hk = bound - radii[i] - radii[j]
         size = np.sqrt(dx * dx + dy * dy) + L[i] + L[j]
         hp = rate * (hk if hk < -settle * size else max(hk, 0.0))
@@ -142,8 +164,9 @@ def _pair_terms(positions, I, J, reach, L, radii, weights, rate, settle, e, sigm
 
 
 @njit(cache=True, error_model="numpy")
-def _sampled_rows(own, e, sigma, h, other, unit, travel, spare, speed, c, beta, rho_full, lo, hi,
-                  dt, shrink, cull):  # fmt: skip
+def _sampled_rows(
+    own, e, sigma, h, other, unit, travel, spare, speed, c, beta, rho_full, lo, hi, dt, shrink, cull
+):
     """Rows 1 and 2 (eq. ``seg-rows``) of every directed row k (agent ``own[k]``, direction
     ``e[k]``, share ``sigma[k]``), those that can bind over the agent's trust box kept (all of
     them without ``cull``; an undefined row, of a body at another's centre, becomes
@@ -207,8 +230,9 @@ def _sampled_rows(own, e, sigma, h, other, unit, travel, spare, speed, c, beta, 
             a = a1 if row == 0 else a2[i]
             Ax, Ay = -a * e[k, 0], -a * e[k, 1]
             bk = Ax * beta[i, 0] + Ay * beta[i, 1] + (tau1 if row == 0 else tau2)
-            Ax, Ay, bk, keep = row_kept(Ax, Ay, bk, box[i, 0], box[i, 1], box[i, 2], box[i, 3],
-                                        cull)  # fmt: skip
+            Ax, Ay, bk, keep = row_kept(
+                Ax, Ay, bk, box[i, 0], box[i, 1], box[i, 2], box[i, 3], cull
+            )
             if keep:
                 q = n1 if row == 0 else n2
                 owner_k[q], other_k[q], h_k[q] = i, other[k], h[k]

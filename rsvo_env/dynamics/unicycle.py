@@ -220,8 +220,9 @@ class Unicycle(Dynamics):
         q_before = before + l * heading_vectors(state.headings)
         state.positions, state.headings = unicycle_step(before, state.headings, u, l, dt)
         state.velocities = (state.positions - before) / dt
-        state.steered_velocities = (state.positions + l * heading_vectors(state.headings)
-                                    - q_before) / dt  # fmt: skip
+        state.steered_velocities = (
+            state.positions + l * heading_vectors(state.headings) - q_before
+        ) / dt
 
     def to_controls(self, actions, params, planar, limits):
         """Normalised actions in [-1, 1]^2 to (v, w): ``(a_0 v_max, a_1 w_max)``, each
@@ -232,15 +233,17 @@ class Unicycle(Dynamics):
 
     def to_actions(self, controls, params, planar, limits):
         """The inverse of :meth:`to_controls` (no clipping)."""
-        return np.stack([controls[..., 0] / _v_max(params, limits),
-                         controls[..., 1] / params["w_max"]], -1)  # fmt: skip
+        return np.stack(
+            [controls[..., 0] / _v_max(params, limits), controls[..., 1] / params["w_max"]], -1
+        )
 
     def hold(self, controls, params, limits):
         """(v, w) held to ``|v| <= v_max`` (each agent's own) and ``|w| <= w_max``, the range of
         :meth:`to_controls`."""
         v_max, w_max = _v_max(params, limits), params["w_max"]
-        return np.stack([np.clip(controls[..., 0], -v_max, v_max),
-                         np.clip(controls[..., 1], -w_max, w_max)], -1)  # fmt: skip
+        return np.stack(
+            [np.clip(controls[..., 0], -v_max, v_max), np.clip(controls[..., 1], -w_max, w_max)], -1
+        )
 
     def global_fields(self):
         return (("heading", -np.pi, np.pi),)

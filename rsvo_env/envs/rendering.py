@@ -215,9 +215,10 @@ def marker_handles(mark_labels: Sequence[str] = ()) -> list[Any]:
     ]
     for k, text in enumerate(mark_labels):
         handles.append(
-            Patch(facecolor=grey, alpha=0.2, edgecolor="k", linestyle=MARK_STYLES[k % 3],
-                  label=text)
-        )  # fmt: skip
+            Patch(
+                facecolor=grey, alpha=0.2, edgecolor="k", linestyle=MARK_STYLES[k % 3], label=text
+            )
+        )
     return handles
 
 
@@ -265,9 +266,16 @@ def plot_trajectories(
         for k, t in enumerate(marks):
             if 0 <= t < len(trajectory):
                 ax.add_patch(
-                    plt.Circle(trajectory[t, i], safety_radius / 2, facecolor=colors[i],
-                               alpha=0.12, edgecolor="k", linestyle=styles[k % 3], lw=0.6)
-                )  # fmt: skip
+                    plt.Circle(
+                        trajectory[t, i],
+                        safety_radius / 2,
+                        facecolor=colors[i],
+                        alpha=0.12,
+                        edgecolor="k",
+                        linestyle=styles[k % 3],
+                        lw=0.6,
+                    )
+                )
         ax.plot(*trajectory[0, i], "o", mfc="white", mec=colors[i], ms=6)
         ax.add_patch(plt.Circle(trajectory[-1, i], safety_radius / 2, color=colors[i], alpha=0.35))
         ax.annotate(str(i + 1), trajectory[-1, i], fontsize=8, ha="center", va="center")
@@ -286,8 +294,13 @@ def plot_trajectories(
             # below the axes and their labels, placed by the layout: it hides no path, no label
             ax.figure.legend(handles=handles, fontsize=6, loc="outside lower center", ncol=ncol)
         else:
-            ax.legend(handles=handles, fontsize=6, loc="upper center",
-                      bbox_to_anchor=(0.5, -0.13), ncol=ncol)  # fmt: skip
+            ax.legend(
+                handles=handles,
+                fontsize=6,
+                loc="upper center",
+                bbox_to_anchor=(0.5, -0.13),
+                ncol=ncol,
+            )
     if colorbar and theta.max() > theta.min():
         cmap = LinearSegmentedColormap.from_list("theta", [EGOIST / 255.0, ALTRUIST / 255.0])
         norm = Normalize(float(theta.min()), float(theta.max()))

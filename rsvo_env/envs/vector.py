@@ -96,9 +96,13 @@ class BatchedEnv:
         self.autoreset_mode = autoreset_mode
         # checked whatever the action mode: a bad value is refused, not ignored
         residual = Residual(
-            gate_radius, residual_right_hand, residual_scale, yield_radius, interaction_radius,
+            gate_radius,
+            residual_right_hand,
+            residual_scale,
+            yield_radius,
+            interaction_radius,
             stall_gate,
-        )  # fmt: skip
+        )
         self.sim = make_simulator(
             scenario, num_envs=num_envs, safety_filter=safety_filter, **kwargs
         )

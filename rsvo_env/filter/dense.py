@@ -24,9 +24,23 @@ MAX_AGENTS = sizes.DENSE_KERNEL_MAX_AGENTS
 
 @njit(cache=True, inline="always")
 def _one_env(
-    e, x, nom, omega, gamma, radii, lo, hi, rows, in_disk, out, feasible, active, violation,
-    n_rows, moved,
-):  # fmt: skip
+    e,
+    x,
+    nom,
+    omega,
+    gamma,
+    radii,
+    lo,
+    hi,
+    rows,
+    in_disk,
+    out,
+    feasible,
+    active,
+    violation,
+    n_rows,
+    moved,
+):
     n = x.shape[1]
     min_h = np.inf
     for i in range(n):
@@ -99,25 +113,55 @@ def _outputs(E: int, n: int) -> Outputs:
 
 
 @njit(cache=True)
-def _serial(x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violation, n_rows, min_h,
-            moved):  # fmt: skip
+def _serial(
+    x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violation, n_rows, min_h, moved
+):
     rows, in_disk = _scratch(x.shape[1])
     for e in range(x.shape[0]):
         min_h[e] = _one_env(
-            e, x, nom, omega, gamma, radii, lo, hi, rows, in_disk, out, feasible, active,
-            violation, n_rows, moved,
-        )  # fmt: skip
+            e,
+            x,
+            nom,
+            omega,
+            gamma,
+            radii,
+            lo,
+            hi,
+            rows,
+            in_disk,
+            out,
+            feasible,
+            active,
+            violation,
+            n_rows,
+            moved,
+        )
 
 
 @njit(cache=True, parallel=True)
-def _parallel(x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violation, n_rows, min_h,
-              moved):  # fmt: skip
+def _parallel(
+    x, nom, omega, gamma, radii, lo, hi, out, feasible, active, violation, n_rows, min_h, moved
+):
     for e in prange(x.shape[0]):
         rows, in_disk = _scratch(x.shape[1])
         min_h[e] = _one_env(
-            e, x, nom, omega, gamma, radii, lo, hi, rows, in_disk, out, feasible, active,
-            violation, n_rows, moved,
-        )  # fmt: skip
+            e,
+            x,
+            nom,
+            omega,
+            gamma,
+            radii,
+            lo,
+            hi,
+            rows,
+            in_disk,
+            out,
+            feasible,
+            active,
+            violation,
+            n_rows,
+            moved,
+        )
 
 
 def _flat(a: NDArray, shape: tuple[int, ...]) -> NDArray[np.float64]:

@@ -39,10 +39,16 @@ MARGIN = 1e-9
 
 
 def search(
-    cfg: FilterConfig, positions: NDArray, nominal: NDArray, floor: Floor,
-    scaled_floor: NDArray, box_radii: NDArray, bodies: Bodies, rows_of: Callable,
+    cfg: FilterConfig,
+    positions: NDArray,
+    nominal: NDArray,
+    floor: Floor,
+    scaled_floor: NDArray,
+    box_radii: NDArray,
+    bodies: Bodies,
+    rows_of: Callable,
     likely: NDArray[np.bool_] | None = None,
-) -> tuple[NDArray, NDArray, Rows, Any, NDArray, NDArray[np.bool_]]:  # fmt: skip
+) -> tuple[NDArray, NDArray, Rows, Any, NDArray, NDArray[np.bool_]]:
     """The large-N pair search by the nominal: each agent searches within the radius of
     ``min(|ū|, |U|)`` (E, N, K, from ``floor``) and keeps a pair where a side's row can bind
     within its disk at its floor's weight (``scaled_floor``: the floors times gamma). An agent
@@ -95,9 +101,13 @@ def _speeds(nominal, box_speed):
 
 
 def box_pairs(
-    positions: NDArray, box_radii: NDArray, group: NDArray, exempt: NDArray[np.bool_],
-    I: NDArray[np.int64], J: NDArray[np.int64],
-) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # fmt: skip
+    positions: NDArray,
+    box_radii: NDArray,
+    group: NDArray,
+    exempt: NDArray[np.bool_],
+    I: NDArray[np.int64],
+    J: NDArray[np.int64],
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """The pairs (I, J) (sorted) with those of each ``exempt`` agent (M,) within its box's
     radius against the other's group (``box_radii`` (E, N, K)) added, sorted."""
     E, n = positions.shape[:2]
@@ -205,13 +215,26 @@ def cull(rows: Rows, nominal: NDArray[np.float64], exempt: NDArray[np.bool_]) ->
     (``nominal`` (M, 2)); the ``exempt`` agents (M,) keep all theirs."""
     keep = _keep(rows.offsets, rows.flat_A, rows.flat_b, nominal, exempt)
     offsets, A, b, hh, nb, un, cp = _compact(
-        rows.offsets, keep, rows.flat_A, rows.flat_b, rows.flat_h, rows.flat_neighbor,
-        rows.flat_unrecoverable, rows.flat_capped,
-    )  # fmt: skip
+        rows.offsets,
+        keep,
+        rows.flat_A,
+        rows.flat_b,
+        rows.flat_h,
+        rows.flat_neighbor,
+        rows.flat_unrecoverable,
+        rows.flat_capped,
+    )
     return replace(
-        rows, flat_A=A, flat_b=b, offsets=offsets, flat_neighbor=nb, flat_h=hh,
-        flat_unrecoverable=un, flat_capped=cp, n_culled=rows.n_culled + len(keep) - len(b),
-    )  # fmt: skip
+        rows,
+        flat_A=A,
+        flat_b=b,
+        offsets=offsets,
+        flat_neighbor=nb,
+        flat_h=hh,
+        flat_unrecoverable=un,
+        flat_capped=cp,
+        n_culled=rows.n_culled + len(keep) - len(b),
+    )
 
 
 @njit(cache=True, inline="always")

@@ -297,9 +297,14 @@ class SafetyFilter:
             exempt = projection_disk.negative_rows(rows.offsets, rows.flat_b)
             rows = projection_disk.cull(rows, solve_nominal.reshape(-1, 2), exempt)
         actions, feasible, active, violation = solvers.solve(
-            cfg.solver, solve_nominal.reshape(E * n, 2), rows.flat_A, rows.flat_b, rows.offsets,
-            solve_box.lo, solve_box.hi,
-        )  # fmt: skip
+            cfg.solver,
+            solve_nominal.reshape(E * n, 2),
+            rows.flat_A,
+            rows.flat_b,
+            rows.offsets,
+            solve_box.lo,
+            solve_box.hi,
+        )
         actions = cfg.model.lower(cfg, actions, solve_box)
         nom = nominal.reshape(E * n, 2)
         env_of_row = rows.owner // n

@@ -62,8 +62,13 @@ def agent_radii(
     largest safe distance of its pairs, ``r_i + max_j r_j``."""
     f = np.ascontiguousarray(omega_floor, dtype=np.float64)
     out = np.empty(f.shape)
-    _agent_radii(f, float(gamma), np.ascontiguousarray(speed, dtype=np.float64),
-                 np.ascontiguousarray(reach, dtype=np.float64), out)  # fmt: skip
+    _agent_radii(
+        f,
+        float(gamma),
+        np.ascontiguousarray(speed, dtype=np.float64),
+        np.ascontiguousarray(reach, dtype=np.float64),
+        out,
+    )
     return out
 
 

@@ -66,9 +66,17 @@ def separate(a0x, a0y, a1x, a1y, b0x, b0y, b1x, b1y, fx, fy):
 def _separation(a0, a1, b0, b1, fallback, n, bound):
     for k in range(len(bound)):
         n[k, 0], n[k, 1], bound[k] = separate(
-            a0[k, 0], a0[k, 1], a1[k, 0], a1[k, 1], b0[k, 0], b0[k, 1], b1[k, 0], b1[k, 1],
-            fallback[k, 0], fallback[k, 1],
-        )  # fmt: skip
+            a0[k, 0],
+            a0[k, 1],
+            a1[k, 0],
+            a1[k, 1],
+            b0[k, 0],
+            b0[k, 1],
+            b1[k, 0],
+            b1[k, 1],
+            fallback[k, 0],
+            fallback[k, 1],
+        )
 
 
 def separation(

@@ -210,8 +210,9 @@ def _solve_csr_one(i, nominal, A, b, offsets, lo, hi, rows, out, feasible, activ
         set_row(rows, nrows, A[k, 0], A[k, 1], b[k])
         nrows += 1
     nom = nominal[i]
-    ok, act, vio = solve_rows(nom[0], nom[1], rows, nrows, lo[i, 0], lo[i, 1], hi[i, 0], hi[i, 1],
-                              out[i])  # fmt: skip
+    ok, act, vio = solve_rows(
+        nom[0], nom[1], rows, nrows, lo[i, 0], lo[i, 1], hi[i, 0], hi[i, 1], out[i]
+    )
     feasible[i] = ok
     active[i] = act
     violation[i] = vio
@@ -258,11 +259,17 @@ def solve_csr(
     agent's, once per thread, so memory follows the rows, not n times the widest."""
     nominal, lo, hi, outputs = _batch(nominal, lo, hi)
     threads.launch(
-        _solve_csr_serial, _solve_csr_parallel, len(nominal),
-        nominal, np.ascontiguousarray(A, dtype=np.float64).reshape(-1, 2),
-        np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.int64),
-        lo, hi, *outputs,
-    )  # fmt: skip
+        _solve_csr_serial,
+        _solve_csr_parallel,
+        len(nominal),
+        nominal,
+        np.ascontiguousarray(A, dtype=np.float64).reshape(-1, 2),
+        np.ascontiguousarray(b, dtype=np.float64),
+        np.ascontiguousarray(offsets, dtype=np.int64),
+        lo,
+        hi,
+        *outputs,
+    )
     return outputs
 
 

@@ -170,9 +170,13 @@ def solve_one(
     # unit row normals, whatever the user's units and the rows' scale (1e-150 to 1e150).
     unit = box_scale(lo, hi)
     x, feasible, t = _solve_unit(
-        np.asarray(nominal, dtype=np.float64) / unit, *unit_rows(A, b, unit), lo / unit,
-        hi / unit, solver, opts,
-    )  # fmt: skip
+        np.asarray(nominal, dtype=np.float64) / unit,
+        *unit_rows(A, b, unit),
+        lo / unit,
+        hi / unit,
+        solver,
+        opts,
+    )
     return x * unit, feasible, t * unit
 
 

@@ -81,8 +81,14 @@ class Rows:
 @njit(cache=True)
 def storage(R):
     """Room for R rows: A (R, 2), b, h (R,), neighbour (R,), and the two flags (R,), False."""
-    return (np.empty((R, 2)), np.empty(R), np.empty(R), np.empty(R, dtype=np.int64),
-            np.zeros(R, dtype=np.bool_), np.zeros(R, dtype=np.bool_))  # fmt: skip
+    return (
+        np.empty((R, 2)),
+        np.empty(R),
+        np.empty(R),
+        np.empty(R, dtype=np.int64),
+        np.zeros(R, dtype=np.bool_),
+        np.zeros(R, dtype=np.bool_),
+    )
 
 
 @njit(cache=True)
@@ -162,9 +168,20 @@ def finish(
     exists, unrecoverable, capped = flags
     lo, hi = (np.ascontiguousarray(np.broadcast_to(x, (n, 2)), dtype=np.float64) for x in (lo, hi))
     A, b, offsets, nb, hh, un, cp = pack(
-        n, I, J, np.ascontiguousarray(A_i), b_i, b_j, h, exists, unrecoverable, capped, lo, hi,
+        n,
+        I,
+        J,
+        np.ascontiguousarray(A_i),
+        b_i,
+        b_j,
+        h,
+        exists,
+        unrecoverable,
+        capped,
+        lo,
+        hi,
         cull,
-    )  # fmt: skip
+    )
     return Rows(
         flat_A=A,
         flat_b=b,
@@ -215,8 +232,26 @@ def with_obstacles(
     """``rows`` with each agent's obstacle rows after its pair rows; an obstacle row's
     ``neighbor`` is ``-1 - o`` for obstacle o (agents are >= 0)."""
     off, A_, b_, hh, nb, un, cp = _interleave(
-        rows.offsets, rows.flat_A, rows.flat_b, rows.flat_h, rows.flat_neighbor,
-        rows.flat_unrecoverable, rows.flat_capped, offsets, A, b, h, -1 - obstacle,
-    )  # fmt: skip
-    return replace(rows, flat_A=A_, flat_b=b_, offsets=off, flat_neighbor=nb, flat_h=hh,
-                   flat_unrecoverable=un, flat_capped=cp)  # fmt: skip
+        rows.offsets,
+        rows.flat_A,
+        rows.flat_b,
+        rows.flat_h,
+        rows.flat_neighbor,
+        rows.flat_unrecoverable,
+        rows.flat_capped,
+        offsets,
+        A,
+        b,
+        h,
+        -1 - obstacle,
+    )
+    return replace(
+        rows,
+        flat_A=A_,
+        flat_b=b_,
+        offsets=off,
+        flat_neighbor=nb,
+        flat_h=hh,
+        flat_unrecoverable=un,
+        flat_capped=cp,
+    )

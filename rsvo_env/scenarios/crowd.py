@@ -14,8 +14,14 @@ from rsvo_env.scenarios.base import COMMON_DEFAULTS, Scenario
 # and 10,000 (docs/liveness.md, "Routing around knots"): a horizon of 1.25 s, bodies the
 # filter's, the goal rule after 1 s within one radius and at once for agents that have reached
 # their goals
-ROUTED = {"rorca_route": True, "rorca_tau": 1.25, "rorca_pad": 1.0, "rorca_goal_reach": 1.0,
-          "rorca_goal_hold": 1.0, "rorca_goal_reached": True}  # fmt: skip
+ROUTED = {
+    "rorca_route": True,
+    "rorca_tau": 1.25,
+    "rorca_pad": 1.0,
+    "rorca_goal_reach": 1.0,
+    "rorca_goal_hold": 1.0,
+    "rorca_goal_reached": True,
+}
 # R-ORCA's general rules (the other scenes'), as the crowd ran them before it routed
 UNROUTED = {key: COMMON_DEFAULTS[key] for key in ROUTED}
 

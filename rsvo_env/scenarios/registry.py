@@ -12,9 +12,18 @@ from rsvo_env.scenarios.unicycle_crowd import UnicycleCrowd
 from rsvo_env.util.validation import shown
 
 SCENARIOS: dict[str, type[Scenario]] = {
-    cls.name: cls for cls in (PositionSwap, CircularSwap, RampMerge, Crowd, Scene, Doorway,
-                              ObstacleField, UnicycleCrowd)
-}  # fmt: skip
+    cls.name: cls
+    for cls in (
+        PositionSwap,
+        CircularSwap,
+        RampMerge,
+        Crowd,
+        Scene,
+        Doorway,
+        ObstacleField,
+        UnicycleCrowd,
+    )
+}
 
 
 def make_scenario(scenario: str | Scenario, **kwargs: Any) -> Scenario:

@@ -53,8 +53,16 @@ class Scene(Scenario):
 
     name = "custom"
     models = dynamics.NAMES
-    defaults = {**BASE, "num_agents": 2, "starts": None, "goals": None, "radii": None,
-                "circles": None, "walls": None, "thickness": 0.1}  # fmt: skip
+    defaults = {
+        **BASE,
+        "num_agents": 2,
+        "starts": None,
+        "goals": None,
+        "radii": None,
+        "circles": None,
+        "walls": None,
+        "thickness": 0.1,
+    }
     nonnegative = (*Scenario.nonnegative, "thickness")
 
     def __init__(self, **kwargs: Any) -> None:
@@ -105,8 +113,12 @@ class Scene(Scenario):
         return self._starts.copy(), np.zeros_like(self._starts), self._goals.copy()
 
     def arena(self):
-        pts = [self._starts, self._goals, self._obstacles.capsules[:, :2].reshape(-1, 2),
-               self._obstacles.capsules[:, 2:4].reshape(-1, 2)]  # fmt: skip
+        pts = [
+            self._starts,
+            self._goals,
+            self._obstacles.capsules[:, :2].reshape(-1, 2),
+            self._obstacles.capsules[:, 2:4].reshape(-1, 2),
+        ]
         allp = np.concatenate(pts)
         pad = 2.0 * float(self._radii.max()) + float(self._obstacles.capsules[:, 4].max(initial=0))
         return allp.min(axis=0) - pad, allp.max(axis=0) + pad
@@ -121,8 +133,16 @@ class Doorway(Scenario):
     name = "doorway"
     models = dynamics.NAMES
     positive = (*Scenario.positive, "gap", "wall_half_length", "thickness", "depth")
-    defaults = {**BASE, "num_agents": 8, "gap": 4.0, "wall_half_length": 12.0, "thickness": 0.4,
-                "depth": 6.0, "max_steps": 4000, "nominal": "rorca"}  # fmt: skip
+    defaults = {
+        **BASE,
+        "num_agents": 8,
+        "gap": 4.0,
+        "wall_half_length": 12.0,
+        "thickness": 0.4,
+        "depth": 6.0,
+        "max_steps": 4000,
+        "nominal": "rorca",
+    }
 
     def check(self) -> None:
         p = self.params
@@ -145,8 +165,9 @@ class Doorway(Scenario):
     def _walls(self) -> Obstacles:
         p = self.params
         g, L = 0.5 * p["gap"], p["wall_half_length"]
-        return Obstacles.of(walls=[((0.0, g), (0.0, L)), ((0.0, -L), (0.0, -g))],
-                            thickness=p["thickness"])  # fmt: skip
+        return Obstacles.of(
+            walls=[((0.0, g), (0.0, L)), ((0.0, -L), (0.0, -g))], thickness=p["thickness"]
+        )
 
     def obstacles(self, rng, starts, goals):
         return self._walls()
@@ -206,8 +227,15 @@ class ObstacleField(Scenario):
     name = "obstacle_field"
     models = dynamics.NAMES
     positive = (*Scenario.positive, "side")
-    defaults = {**BASE, "num_agents": 10, "side": 20.0, "num_circles": 8,
-                "circle_radius": (0.5, 1.5), "max_steps": 3000, "nominal": "rorca"}  # fmt: skip
+    defaults = {
+        **BASE,
+        "num_agents": 10,
+        "side": 20.0,
+        "num_circles": 8,
+        "circle_radius": (0.5, 1.5),
+        "max_steps": 3000,
+        "nominal": "rorca",
+    }
 
     def check(self) -> None:
         check_count(self.params["num_circles"], "obstacle_field.num_circles", 0)

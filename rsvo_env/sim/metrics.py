@@ -50,10 +50,28 @@ FLAT_FIELDS = (
 
 @njit(cache=True)
 def _accumulate(
-    counts, min_distance, infeasible, sums, arrival, min_barrier, before, after, starts, goals,
-    applied, requested, nearest, rh, at_goal, feasible, min_h, dt, collision_below, series,
+    counts,
+    min_distance,
+    infeasible,
+    sums,
+    arrival,
+    min_barrier,
+    before,
+    after,
+    starts,
+    goals,
+    applied,
+    requested,
+    nearest,
+    rh,
+    at_goal,
+    feasible,
+    min_h,
+    dt,
+    collision_below,
+    series,
     contact,
-):  # fmt: skip
+):
     """One step of every env: counters, first-event steps, per-agent sums (see ``update``).
     A collision step has some ``contact[e, i] < collision_below`` (``contact`` the nearest
     distance itself, or :func:`rsvo_env.geometry.clearance.contact` with the threshold 1 - 1e-9).
@@ -125,8 +143,16 @@ def _flat(counts, min_distance, infeasible, arrival):
         arrived[e], makespan[e] = _arrivals(arrival[e])
         success[e] = counts[e, 3] >= 0
     steps, completed, collisions = counts[:, 0].copy(), counts[:, 3].copy(), counts[:, 4].copy()
-    return (steps, success, completed, min_distance.copy(), collisions, infeasible.copy(),
-            arrived, makespan)  # fmt: skip
+    return (
+        steps,
+        success,
+        completed,
+        min_distance.copy(),
+        collisions,
+        infeasible.copy(),
+        arrived,
+        makespan,
+    )
 
 
 @njit(cache=True)
@@ -141,8 +167,16 @@ def _add_counts(unrecoverable, more_unrecoverable, capped, more_capped):
 def _flat_row(counts, min_distance, infeasible, arrival, e):
     """Env e's :func:`_flat` values as scalars, in :data:`FLAT_FIELDS` order."""
     arrived, makespan = _arrivals(arrival[e])
-    return (counts[e, 0], counts[e, 3] >= 0, counts[e, 3], min_distance[e], counts[e, 4],
-            infeasible[e], arrived, makespan)  # fmt: skip
+    return (
+        counts[e, 0],
+        counts[e, 3] >= 0,
+        counts[e, 3],
+        min_distance[e],
+        counts[e, 4],
+        infeasible[e],
+        arrived,
+        makespan,
+    )
 
 
 class EpisodeMetrics:

@@ -137,8 +137,7 @@ if _KERNEL_LAYOUT != tuple(tuple(x for f in t for x in (f.name, f.width)) for t 
 
 
 @njit(cache=True, inline="always")
-def _fill(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall, own,
-          out):  # fmt: skip
+def _fill(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall, own, out):
     # every value read into a local before the first write: the compiler cannot tell that
     # ``out`` shares no memory with the inputs, and would read them again after each write
     E, n, K = nb.shape
@@ -180,15 +179,42 @@ def _fill(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii
 # 16 us a call, one thread)
 @njit(cache=True)
 def _observe(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall, out):
-    _fill(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall,
-          OWN_WIDTH, out)  # fmt: skip
+    _fill(
+        x,
+        v,
+        goals,
+        theta,
+        omega,
+        by_index,
+        nb,
+        frame_angle,
+        use_frame,
+        radii,
+        stall,
+        OWN_WIDTH,
+        out,
+    )
 
 
 @njit(cache=True)
-def _observe_clock(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall,
-                   out):  # fmt: skip
-    _fill(x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall,
-          OWN_WIDTH + 1, out)  # fmt: skip
+def _observe_clock(
+    x, v, goals, theta, omega, by_index, nb, frame_angle, use_frame, radii, stall, out
+):
+    _fill(
+        x,
+        v,
+        goals,
+        theta,
+        omega,
+        by_index,
+        nb,
+        frame_angle,
+        use_frame,
+        radii,
+        stall,
+        OWN_WIDTH + 1,
+        out,
+    )
 
 
 def observe(

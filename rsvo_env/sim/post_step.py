@@ -68,9 +68,18 @@ def by_hooks(
     derive(sim)
     at_goal = s.at_goal
     sim.metrics.update(
-        before, s.positions, s.starts, s.goals, s.nearest, s.rh_active, at_goal, requested,
-        applied, stats, s.contact,
-    )  # fmt: skip
+        before,
+        s.positions,
+        s.starts,
+        s.goals,
+        s.nearest,
+        s.rh_active,
+        at_goal,
+        requested,
+        applied,
+        stats,
+        s.contact,
+    )
     first_arrival, terminated, truncated = _episode_end(
         at_goal, s.reached, sim.metrics.counts, sim.max_steps
     )
@@ -97,10 +106,43 @@ def _episode_end(at_goal, reached, counts, max_steps):
 
 
 @njit(cache=True)
-def _fused(x, before, goals, starts, reached, k, tol, rh_on, trigger, rh_hold, weights, counts,
-           min_distance, infeasible, sums, arrival, min_barrier, applied, requested, feasible,
-           min_h, dt, collision_below, series, max_steps, margin, best, stalled_steps,
-           nearest, neighbors, at_goal, rh, reward, terminated, truncated):  # fmt: skip
+def _fused(
+    x,
+    before,
+    goals,
+    starts,
+    reached,
+    k,
+    tol,
+    rh_on,
+    trigger,
+    rh_hold,
+    weights,
+    counts,
+    min_distance,
+    infeasible,
+    sums,
+    arrival,
+    min_barrier,
+    applied,
+    requested,
+    feasible,
+    min_h,
+    dt,
+    collision_below,
+    series,
+    max_steps,
+    margin,
+    best,
+    stalled_steps,
+    nearest,
+    neighbors,
+    at_goal,
+    rh,
+    reward,
+    terminated,
+    truncated,
+):
     """:func:`by_hooks` with the base hooks, as one compiled pass of the same kernels, into the
     given outputs (allocated by the caller: arrays a compiled call returns cost more each)."""
     E, n = x.shape[0], x.shape[1]
@@ -116,15 +158,42 @@ def _fused(x, before, goals, starts, reached, k, tol, rh_on, trigger, rh_hold, w
         rh[:] = right_hand_active(nearest, at_goal, trigger, stalled_steps, dt, rh_hold)
     else:
         rh[:] = False
-    _accumulate(counts, min_distance, infeasible, sums, arrival, min_barrier, before, x, starts,
-                goals, applied, requested, nearest, rh, at_goal, feasible, min_h, dt,
-                collision_below, series, nearest)  # fmt: skip
+    _accumulate(
+        counts,
+        min_distance,
+        infeasible,
+        sums,
+        arrival,
+        min_barrier,
+        before,
+        x,
+        starts,
+        goals,
+        applied,
+        requested,
+        nearest,
+        rh,
+        at_goal,
+        feasible,
+        min_h,
+        dt,
+        collision_below,
+        series,
+        nearest,
+    )
     first, term, trunc = _episode_end(at_goal, reached, counts, max_steps)
     terminated[:] = term
     truncated[:] = trunc
-    _reward_terms(before.reshape(-1, 2), x.reshape(-1, 2), goals.reshape(-1, 2),
-                  first.reshape(-1), weights[0], weights[1], weights[2],
-                  reward.reshape(-1))  # fmt: skip
+    _reward_terms(
+        before.reshape(-1, 2),
+        x.reshape(-1, 2),
+        goals.reshape(-1, 2),
+        first.reshape(-1),
+        weights[0],
+        weights[1],
+        weights[2],
+        reward.reshape(-1),
+    )
     _tick(x, goals, at_goal, margin, best, stalled_steps)
 
 
@@ -137,9 +206,15 @@ def fused(
     p = sc.params
     rh_on = sc.right_hand_on
     E, n = s.at_goal.shape
-    out = (np.empty((E, n)), np.empty((E, n, sim.k), dtype=np.int64),
-           np.empty((E, n), dtype=np.bool_), np.empty((E, n), dtype=np.bool_), np.empty((E, n)),
-           np.empty(E, dtype=np.bool_), np.empty(E, dtype=np.bool_))  # fmt: skip
+    out = (
+        np.empty((E, n)),
+        np.empty((E, n, sim.k), dtype=np.int64),
+        np.empty((E, n), dtype=np.bool_),
+        np.empty((E, n), dtype=np.bool_),
+        np.empty((E, n)),
+        np.empty(E, dtype=np.bool_),
+        np.empty(E, dtype=np.bool_),
+    )
     _fused(
         np.ascontiguousarray(s.positions),
         np.ascontiguousarray(before),

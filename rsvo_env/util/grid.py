@@ -119,9 +119,14 @@ def _pairs(x, radius, group, cell, nominal, scaled_floor, reach, boxed):
                         if disk and not (
                             boxed[e, i]
                             or _may_bind(-dx, -dy, d2, uxi, uyi, si, ai, Ri)
-                            or (d2 <= rj * rj and (bx[s] or _may_bind(dx, dy, d2, ux[s], uy[s],
-                                                                      us[s], aa[s, gi], RR[s])))
-                        ):  # fmt: skip
+                            or (
+                                d2 <= rj * rj
+                                and (
+                                    bx[s]
+                                    or _may_bind(dx, dy, d2, ux[s], uy[s], us[s], aa[s, gi], RR[s])
+                                )
+                            )
+                        ):
                             continue  # neither row can bind
                         if m == cap:
                             cap *= 2
@@ -246,12 +251,22 @@ def pairs_within_radii(
     # an agent with an infinite radius scans every cell whatever their size
     cell = _mean_radii(r)
     if disk is None:
-        disk = (np.zeros((0, 0, 2)), np.zeros((0, 0, 0)), np.zeros((0, 0)),
-                np.zeros((0, 0), dtype=np.bool_))  # fmt: skip
+        disk = (
+            np.zeros((0, 0, 2)),
+            np.zeros((0, 0, 0)),
+            np.zeros((0, 0)),
+            np.zeros((0, 0), dtype=np.bool_),
+        )
     *floats, boxed = disk
     floats = [np.ascontiguousarray(a, dtype=np.float64) for a in floats]
-    I, J = _pairs(x, r, np.ascontiguousarray(group, dtype=np.int64), cell, *floats,
-                  np.ascontiguousarray(boxed, dtype=np.bool_))  # fmt: skip
+    I, J = _pairs(
+        x,
+        r,
+        np.ascontiguousarray(group, dtype=np.int64),
+        cell,
+        *floats,
+        np.ascontiguousarray(boxed, dtype=np.bool_),
+    )
     return _sorted(I, J, x.shape[0] * x.shape[1])
 
 

@@ -42,8 +42,12 @@ def unknown_keywords(owner: str, unknown: Sequence[str], known: Iterable[str]) -
     """The message for keywords ``owner`` does not take: the list of them, the known one each
     most resembles, and the known ones listed while the message stays under 500 characters."""
     known = sorted(known)
-    guesses = [f"{shown(k)} -> {shown(close[0])}" for k in list(unknown)[:4]
-               for close in [difflib.get_close_matches(str(k), known, 1)] if close]  # fmt: skip
+    guesses = [
+        f"{shown(k)} -> {shown(close[0])}"
+        for k in list(unknown)[:4]
+        for close in [difflib.get_close_matches(str(k), known, 1)]
+        if close
+    ]
     head = f"{owner} got unknown keyword argument(s) {shown(list(unknown))}"
     if guesses:
         head += f" (did you mean {', '.join(guesses)}?)"

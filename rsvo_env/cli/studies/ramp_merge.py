@@ -46,9 +46,15 @@ def study(plan: Plan, progress: Callable) -> dict[str, Any]:
         for barrier in BARRIERS:
             agg = summary.setdefault(
                 (split, barrier),
-                {"runs": 0, "unequal": 0, "egoist_first": 0, "unsafe": 0, "worst": np.inf,
-                 "infeasible": 0},
-            )  # fmt: skip
+                {
+                    "runs": 0,
+                    "unequal": 0,
+                    "egoist_first": 0,
+                    "unsafe": 0,
+                    "worst": np.inf,
+                    "infeasible": 0,
+                },
+            )
             for angle in plan.ramp_angles:
                 for gamma in plan.ramp_gammas:
                     for case, theta in CASES.items():
@@ -74,9 +80,17 @@ def study(plan: Plan, progress: Callable) -> dict[str, Any]:
                             agg["egoist_first"] += int(first == egoist)
                         if angle == p["lane_angle_deg"] and gamma == p["gamma"]:
                             detail.append(
-                                [split, barrier, case, first, t[0], t[1], out["min_distance"],
-                                 out["n_infeasible"]]
-                            )  # fmt: skip
+                                [
+                                    split,
+                                    barrier,
+                                    case,
+                                    first,
+                                    t[0],
+                                    t[1],
+                                    out["min_distance"],
+                                    out["n_infeasible"],
+                                ]
+                            )
                             if (split, barrier) in FIGURE_DESIGNS:
                                 figure_runs[(split, case)] = out
     return {
