@@ -7,7 +7,8 @@ hashed).
     python benchmarks/episode_digest.py | diff before.txt -   # at another
 
 Only public paths are used (``rsvo_env.parallel_env``, ``rsvo_env.envs.vector.BatchedEnv``,
-``wrappers``), so the script runs unchanged across a move of the library's modules.
+the filter wrapper where a library before 1.0 needs it: ``single_env_speed.single_env``), so the
+script runs unchanged across a move of the library's modules.
 """
 
 from __future__ import annotations
@@ -18,12 +19,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from rsvo_env import wrappers
+from single_env_speed import single_env
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-import rsvo_env  # noqa: E402
 from rsvo_env.envs.vector import BatchedEnv  # noqa: E402
 
 STEPS = 300
@@ -79,9 +78,7 @@ FILTER_ONLY = ("split",)
 
 
 def single(scenario: str, filtered: bool, kwargs: dict[str, Any]) -> str:
-    env = rsvo_env.parallel_env(scenario, **scene_part(kwargs))
-    if filtered:
-        env = wrappers.RCBFSafetyFilter(env, **filter_part(kwargs))
+    env = single_env(scenario, filtered, filter_part(kwargs), **scene_part(kwargs))
     d = Digest()
     d.add(env.reset(seed=3))
     for _ in range(STEPS):

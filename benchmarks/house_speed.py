@@ -40,23 +40,35 @@ def rate(step, agents):
         n += 1
     return n * agents / (time.perf_counter() - start)
 
-if case.startswith("batched"):
+# the trees compared may span 1.0, which exported BatchedEnv at the top, filtered every env by
+# default and removed the alias modules: each name from where its tree has it
+try:
     from rsvo_env import BatchedEnv
+except ImportError:
+    from rsvo_env.vector import BatchedEnv
+try:
+    from rsvo_env.control.nominal import move_to_goal
+except ImportError:
+    from rsvo_env.nominal import move_to_goal
+
+if case.startswith("batched"):
     n, e = (16, 256) if case == "batched 16x256" else (64, 32)
     env = BatchedEnv("crowd", num_envs=e, num_agents=n, safety_filter=True)
     env.reset(seed=0)
     a = np.random.default_rng(0).uniform(-1, 1, (e, n, 2))
     r = rate(lambda: env.step(a), n * e)
 elif case == "single 6":
+    import importlib
     import rsvo_env
-    from rsvo_env import wrappers
-
-    env = rsvo_env.parallel_env("crowd", num_agents=6, max_steps=10**9)
+    try:  # from 1.0 every env filters
+        env = rsvo_env.parallel_env("crowd", num_agents=6, max_steps=10**9, safety_filter=True)
+    except TypeError:  # before it, the filter a wrapper of the top-level package wrappers
+        bare = rsvo_env.parallel_env("crowd", num_agents=6, max_steps=10**9)
+        env = importlib.import_module("wrappers").RCBFSafetyFilter(bare)
     env.reset(seed=0)
     acts = {k: np.array([0.5, 0.2]) for k in env.possible_agents}
     r = rate(lambda: env.step(acts), 6)
 elif case.startswith("arrays"):
-    from rsvo_env.control.nominal import move_to_goal
     from rsvo_env import FilterConfig, SafetyFilter
     from rsvo_env.scenarios import Crowd
     n = int(case.split()[1])
@@ -69,7 +81,6 @@ elif case.startswith("arrays"):
         state["x"] = state["x"] + 0.05 * u
     r = rate(step, n)
 elif case == "double 100":
-    from rsvo_env import BatchedEnv
     env = BatchedEnv("custom", num_envs=1, safety_filter=True, dynamics="double_integrator",
                      starts=np.c_[np.arange(100) % 10 * 3.0, np.arange(100) // 10 * 3.0],
                      goals=np.c_[27 - np.arange(100) % 10 * 3.0, 27 - np.arange(100) // 10 * 3.0],

@@ -18,6 +18,7 @@ prints one JSON line: agent-steps per second of ``bare``, ``filtered`` and ``ref
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
 import time
@@ -26,7 +27,23 @@ from collections.abc import Callable
 import numpy as np
 
 import rsvo_env
-from rsvo_env import wrappers
+
+
+def single_env(scenario: str, filtered: bool, filter_kwargs: dict | None = None, **kwargs):
+    """The single env, filtered or bare, in this library or an older one (the comparisons run
+    earlier revisions): from 1.0 every env filters unless ``safety_filter=False`` and takes the
+    filter's keywords; before it, ``parallel_env`` was bare and the filter a wrapper of the
+    top-level package ``wrappers``."""
+    given = filter_kwargs or {} if filtered else {}
+    try:
+        return rsvo_env.parallel_env(scenario, safety_filter=filtered, **given, **kwargs)
+    except TypeError as exc:
+        if "safety_filter" not in str(exc):
+            raise
+    env = rsvo_env.parallel_env(scenario, **kwargs)
+    if filtered:  # a library before 1.0: its top-level ``wrappers`` (imported by name)
+        env = importlib.import_module("wrappers").RCBFSafetyFilter(env, **given)
+    return env
 
 
 def rate(step: Callable[[], None], agents: int, seconds: float) -> float:
@@ -50,19 +67,17 @@ def best(makers: dict[str, Callable[[], tuple[Callable, int]]], seconds: float, 
     return rates
 
 
-def crowd(n: int):
+def crowd(n: int, filtered: bool):
     """The crowd under move-to-goal, the scripted work these figures have always timed (an
     older library, before R-ORCA, has no ``nominal`` and is move-to-goal already)."""
     try:
-        return rsvo_env.parallel_env("crowd", num_agents=n, nominal="move_to_goal")
+        return single_env("crowd", filtered, num_agents=n, nominal="move_to_goal")
     except TypeError:
-        return rsvo_env.parallel_env("crowd", num_agents=n)
+        return single_env("crowd", filtered, num_agents=n)
 
 
 def single(n: int, filtered: bool) -> tuple[Callable, int]:
-    env = crowd(n)
-    if filtered:
-        env = wrappers.RCBFSafetyFilter(env)
+    env = crowd(n, filtered)
     env.reset(seed=0)
     base = env.unwrapped
 

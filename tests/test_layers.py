@@ -208,3 +208,46 @@ def test_no_plain_function_over_12_parameters_and_few_wide_kernels():
     plain, kernels = parameter_counts()
     assert plain == []
     assert len(kernels) <= 3, kernels
+
+
+def private_names_crossing(root: Path) -> list[str]:
+    """Every ``from m import _x`` and ``m._x`` (m a module of the package, imported) in the
+    package's modules: what another module needs is public."""
+    found = []
+    for path in root.rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        aliases = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith(root.name):
+                for a in node.names:
+                    if a.name.startswith("_") and not a.name.startswith("__"):
+                        found.append(f"{path.name}:{node.lineno} {node.module}.{a.name}")
+                    aliases.add(a.asname or a.name)
+            elif isinstance(node, ast.Import):
+                aliases |= {a.asname or a.name for a in node.names if a.name.startswith(root.name)}
+        for node in ast.walk(tree):
+            if (
+                isinstance(node, ast.Attribute)
+                and node.attr.startswith("_")
+                and not node.attr.startswith("__")
+                and isinstance(node.value, ast.Name)
+                and node.value.id in aliases
+            ):
+                found.append(f"{path.name}:{node.lineno} {node.value.id}.{node.attr}")
+    return found
+
+
+def test_no_module_imports_another_modules_private_name(tmp_path):
+    site = layout.lay_out(tmp_path / "site", copy=True)
+    assert private_names_crossing(site / "rsvo_env") == []
+
+
+def test_the_private_name_finder_finds_both_forms(tmp_path):
+    pkg = tmp_path / "rsvo_env"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "a.py").write_text("def _hidden():\n    pass\n")
+    (pkg / "b.py").write_text("from rsvo_env.a import _hidden\n")
+    (pkg / "c.py").write_text("from rsvo_env import a\n\na._hidden()\n")
+    found = private_names_crossing(pkg)
+    assert sorted(f.split(" ")[0] for f in found) == ["b.py:1", "c.py:3"], found

@@ -32,7 +32,7 @@ from rsvo_env.control.rorca_agent import (
 from rsvo_env.responsibility.svo import share_of
 from rsvo_env.util import threads
 from rsvo_env.util.borrowed import borrow
-from rsvo_env.util.grid import _build, _span
+from rsvo_env.util.grid import build_cells, cell_span
 from rsvo_env.util.planar import clip2
 
 # the list width a call with every neighbour (K < 0) tries first; a crowd denser than that is
@@ -44,7 +44,7 @@ CHUNK = 64
 
 @njit(cache=True)
 def _index(x, n, cut):
-    """Each env's grid (``util.grid._build``, cells of side ``cut / 2``: a scan covers about
+    """Each env's grid (``util.grid.build_cells``, cells of side ``cut / 2``: a scan covers about
     twice the cut's disk, where cells of side ``cut`` cover three times it): ``perm`` (M,) the
     agents in cell order env by env, ``start`` (E, cells + 1) each env's cell offsets within
     its n, ``geometry`` (E, 5) origin, side and counts of its cells."""
@@ -54,7 +54,7 @@ def _index(x, n, cut):
     start = np.zeros((E, 4 * n + 65), dtype=np.int64)
     geometry = np.empty((E, 5))
     for e in range(E):
-        lo0, lo1, c, nx, ny, st, order = _build(x[e * n : (e + 1) * n], 0.5 * cut)
+        lo0, lo1, c, nx, ny, st, order = build_cells(x[e * n : (e + 1) * n], 0.5 * cut)
         perm[e * n : (e + 1) * n] = order + e * n
         start[e, : nx * ny + 1] = st
         geometry[e, 0], geometry[e, 1], geometry[e, 2] = lo0, lo1, c
@@ -115,8 +115,8 @@ def _list_block(lo, hi, n, data, index, settings, keep, lists, within):
         lo0, lo1, c = geometry[e, 0], geometry[e, 1], geometry[e, 2]
         nx, ny = int(geometry[e, 3]), int(geometry[e, 4])
         xs_s = (xs[s, 0], xs[s, 1])
-        a0, b0 = _span(xs_s[0], reach, lo0, c, nx)
-        a1, b1 = _span(xs_s[1], reach, lo1, c, ny)
+        a0, b0 = cell_span(xs_s[0], reach, lo0, c, nx)
+        a1, b1 = cell_span(xs_s[1], reach, lo1, c, ny)
         w = 0
         for gx in range(a0, b0 + 1):
             # cells a1..b1 of a column are consecutive: their agents are one run

@@ -79,7 +79,7 @@ class StallClock:
         safety_radius: float,
     ) -> None:
         """One step of every env: ``positions`` and ``goals`` (E, N, 2) after it."""
-        _tick(positions, goals, at_goal, PROGRESS * safety_radius, self.best, self.steps)
+        tick_clocks(positions, goals, at_goal, PROGRESS * safety_radius, self.best, self.steps)
 
     def value(self, envs: NDArray[np.int64] | slice = slice(None)) -> NDArray[np.float64]:
         """The observed clock (E, N) (of ``envs``): steps stalled over ``unit``."""
@@ -91,7 +91,7 @@ class StallClock:
 
 
 @njit(cache=True)
-def _tick(x, goals, at_goal, margin, best, steps):
+def tick_clocks(x, goals, at_goal, margin, best, steps):
     """In place: an agent that came ``margin`` closer than its best (or is at its goal) starts
     its clock again from its new best; every other agent's clock advances. The distance is
     :func:`goal_distance`'s arithmetic, computed here: one call a step, not three."""

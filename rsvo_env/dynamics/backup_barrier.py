@@ -213,7 +213,7 @@ def backup_rows(
     keep = binding(A, b, owner_all, box_lo, box_hi, cull)
     trust = None
     if dt is not None:
-        trust = _trust_rows(t.beta, rho, lo, hi, smallest_by_owner(owner_all, h_all, M), M, cull)
+        trust = trust_box_rows(t.beta, rho, lo, hi, smallest_by_owner(owner_all, h_all, M), M, cull)
     rows = kept_rows(M, (owner_all, A, b, others_all, h_all), keep, trust, h, len(I))
     return rows, obstacle_h
 
@@ -273,7 +273,7 @@ def kept_rows(
     examined: int | None = None,
 ) -> Rows:
     """The barrier's rows (owner, A, b, neighbour, h) where ``keep`` (None: ``rows`` are the
-    kept ones, of ``examined``), then each agent's trust rows (``_trust_rows``, None in
+    kept ones, of ``examined``), then each agent's trust rows (``trust_box_rows``, None in
     continuous time), stored by agent."""
     parts = [rows if keep is None else tuple(x[keep] for x in rows)]
     if trust is not None:
@@ -294,7 +294,7 @@ def smallest_by_owner(owner: NDArray, h: NDArray, M: int) -> NDArray[np.float64]
     return h_min
 
 
-def _trust_rows(beta, rho, lo, hi, h_min, M, cull):
+def trust_box_rows(beta, rho, lo, hi, h_min, M, cull):
     """Each agent's trust box ``|a - beta|_inf <= rho`` as four rows (the QP keeps the agent's
     own box, so its round-off allowances stay in the box's units), the agent itself as their
     neighbour, its smallest h (``h_min``) as their h; those the box makes redundant culled."""

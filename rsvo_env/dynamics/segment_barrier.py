@@ -34,7 +34,6 @@ from rsvo_env.dynamics.backup_barrier import (
     TRUST_SHRINK,
     AgentBoxes,
     AgentTerms,
-    _trust_rows,
     agent_terms,
     binding,
     kept_rows,
@@ -43,6 +42,7 @@ from rsvo_env.dynamics.backup_barrier import (
     row_kept,
     settled,
     stopping_reach,
+    trust_box_rows,
 )
 from rsvo_env.dynamics.barriers import braking_capability
 from rsvo_env.geometry.segments import separate, separation
@@ -136,7 +136,7 @@ def segment_rows(
         TRUST_SHRINK,
         cull,
     )
-    trust = _trust_rows(t.beta, rho, lo, hi, h_min, M, cull)
+    trust = trust_box_rows(t.beta, rho, lo, hi, h_min, M, cull)
     return kept_rows(M, tuple(kept), None, trust, h, len(I), 2 * len(own)), obstacle_h
 
 

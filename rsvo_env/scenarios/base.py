@@ -64,7 +64,7 @@ NOMINALS = ("move_to_goal", "rorca")
 
 
 @njit(cache=True)
-def _reward_terms(before, after, goals, first, progress_w, time_w, goal_w, out):
+def reward_terms(before, after, goals, first, progress_w, time_w, goal_w, out):
     """Per agent: ``progress_w (|before - goal| - |after - goal|) - time_w + goal_w first``."""
     for i in range(before.shape[0]):
         bx, by = before[i, 0] - goals[i, 0], before[i, 1] - goals[i, 1]
@@ -374,7 +374,7 @@ class Scenario:
         """Per-agent reward (E, N): progress toward the goal, a time cost, a goal bonus once."""
         out = np.empty(first_arrival.shape)
         # reshape copies only what is not contiguous already
-        _reward_terms(
+        reward_terms(
             before.reshape(-1, 2),
             after.reshape(-1, 2),
             goals.reshape(-1, 2),

@@ -49,7 +49,7 @@ FLAT_FIELDS = (
 
 
 @njit(cache=True)
-def _accumulate(
+def accumulate_step(
     counts,
     min_distance,
     infeasible,
@@ -256,7 +256,7 @@ class EpisodeMetrics:
         (collisions are then counted on it)."""
         feasible, min_h = self.begin(filter_stats)
         measure, below = self.collision_measure(nearest, contact)
-        _accumulate(
+        accumulate_step(
             self.counts,
             self.min_distance,
             self.infeasible,
@@ -292,7 +292,7 @@ class EpisodeMetrics:
         return contact, 1.0 - COLLISION_TOL
 
     def begin(self, filter_stats: dict[str, Any] | None) -> tuple[NDArray, NDArray]:
-        """The part of :meth:`update` before its kernel (``_accumulate``): the filter's counts
+        """The part of :meth:`update` before its kernel (``accumulate_step``): the filter's counts
         added; returns the kernel's ``feasible`` and ``min_h`` arguments."""
         if filter_stats is None:
             return _NO_FEASIBLE, _NO_MIN_H

@@ -19,13 +19,13 @@ from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env.control.nominal import right_hand_active
-from rsvo_env.control.stall import PROGRESS, _tick
+from rsvo_env.control.stall import PROGRESS, tick_clocks
 from rsvo_env.geometry.clearance import contact
-from rsvo_env.scenarios.base import Scenario, _reward_terms
-from rsvo_env.sim.metrics import _accumulate
+from rsvo_env.scenarios.base import Scenario, reward_terms
+from rsvo_env.sim.metrics import accumulate_step
 from rsvo_env.sim.view import SimulatorView
-from rsvo_env.util.neighbors import DENSE_MAX_AGENTS, _knn_dense_new, nearest_neighbors
-from rsvo_env.util.planar import _within
+from rsvo_env.util.neighbors import DENSE_MAX_AGENTS, knn_dense_arrays, nearest_neighbors
+from rsvo_env.util.planar import within_distance
 
 _HOOKS = ("at_goal", "right_hand_active", "reward")
 
@@ -146,19 +146,19 @@ def _fused(
     """:func:`by_hooks` with the base hooks, as one compiled pass of the same kernels, into the
     given outputs (allocated by the caller: arrays a compiled call returns cost more each)."""
     E, n = x.shape[0], x.shape[1]
-    dist, idx = _knn_dense_new(x, max(k, 1))
+    dist, idx = knn_dense_arrays(x, max(k, 1))
     for e in range(E):
         for i in range(n):
             nearest[e, i] = dist[e, i, 0]
             for c in range(k):
                 neighbors[e, i, c] = idx[e, i, c]
-    at_goal[:] = _within(x, goals, tol)
+    at_goal[:] = within_distance(x, goals, tol)
     if rh_on:
         # Scenario.right_hand_active's, on the clock before this tick
         rh[:] = right_hand_active(nearest, at_goal, trigger, stalled_steps, dt, rh_hold)
     else:
         rh[:] = False
-    _accumulate(
+    accumulate_step(
         counts,
         min_distance,
         infeasible,
@@ -184,7 +184,7 @@ def _fused(
     first, term, trunc = _episode_end(at_goal, reached, counts, max_steps)
     terminated[:] = term
     truncated[:] = trunc
-    _reward_terms(
+    reward_terms(
         before.reshape(-1, 2),
         x.reshape(-1, 2),
         goals.reshape(-1, 2),
@@ -194,7 +194,7 @@ def _fused(
         weights[2],
         reward.reshape(-1),
     )
-    _tick(x, goals, at_goal, margin, best, stalled_steps)
+    tick_clocks(x, goals, at_goal, margin, best, stalled_steps)
 
 
 def fused(

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 
 
 @njit(cache=True)
-def _build(x, cell):
+def build_cells(x, cell):
     """Cells of side ``cell`` over the points' bounding box (coarsened so there are at most
     about 4 cells a point): (origin, cell, nx, ny, start, order) with the points of cell c at
     ``order[start[c]:start[c + 1]]``, in index order."""
@@ -40,7 +40,7 @@ def _build(x, cell):
 
 
 @njit(cache=True)
-def _span(v, r, lo, cell, m):
+def cell_span(v, r, lo, cell, m):
     """Cell range [a, b] covering [v - r, v + r] along one axis of m cells (r may be huge)."""
     a = min(max((v - r - lo) / cell, 0.0), m - 1.0)
     b = min(max((v + r - lo) / cell, 0.0), m - 1.0)
@@ -86,7 +86,7 @@ def _pairs(x, radius, group, cell, nominal, scaled_floor, reach, boxed):
             members = np.nonzero(ge == g)[0]
             if members.shape[0] == 0:
                 continue
-            lo0, lo1, c, nx, ny, start, order = _build(xe[members], cell[e, g])
+            lo0, lo1, c, nx, ny, start, order = build_cells(xe[members], cell[e, g])
             # the group's agents in cell order, so a cell's scan reads contiguous memory
             idx = members[order]
             px, py, rr = xe[idx, 0].copy(), xe[idx, 1].copy(), re[idx].copy()
@@ -103,8 +103,8 @@ def _pairs(x, radius, group, cell, nominal, scaled_floor, reach, boxed):
                     uxi, uyi = nominal[e, i, 0], nominal[e, i, 1]
                     si, ai, Ri = np.sqrt(uxi * uxi + uyi * uyi), scaled_floor[e, i, g], reach[e, i]
                 r2 = ri * ri
-                a0, b0 = _span(xe[i, 0], ri, lo0, c, nx)
-                a1, b1 = _span(xe[i, 1], ri, lo1, c, ny)
+                a0, b0 = cell_span(xe[i, 0], ri, lo0, c, nx)
+                a1, b1 = cell_span(xe[i, 1], ri, lo1, c, ny)
                 for gx in range(a0, b0 + 1):
                     # cells a1..b1 of a column are consecutive: their agents are one run
                     for s in range(start[gx * ny + a1], start[gx * ny + b1 + 1]):
@@ -188,7 +188,7 @@ def _nearest(x, out):
         span0 = xe[:, 0].max() - xe[:, 0].min()
         span1 = xe[:, 1].max() - xe[:, 1].min()
         cell = max(np.sqrt(span0 * span1 / n), max(span0, span1) / n, 1e-300)
-        lo0, lo1, c, nx, ny, start, order = _build(xe, cell)
+        lo0, lo1, c, nx, ny, start, order = build_cells(xe, cell)
         for i in range(n):
             gx0 = min(int((xe[i, 0] - lo0) / c), nx - 1)
             gy0 = min(int((xe[i, 1] - lo1) / c), ny - 1)

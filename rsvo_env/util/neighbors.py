@@ -187,7 +187,7 @@ def _knn_lanes(x, k, dist, idx):
 
 
 @njit(cache=True)
-def _knn_dense_new(x, k):
+def knn_dense_arrays(x, k):
     """:func:`_knn_dense` with its outputs allocated here."""
     dist = np.empty((x.shape[0], x.shape[1], k))
     idx = np.empty((x.shape[0], x.shape[1], k), dtype=np.int64)
@@ -212,7 +212,7 @@ def nearest_neighbors(
     if flat.ndim != 3:
         flat = flat.reshape(-1, n, 2)
     if n <= DENSE_MAX_AGENTS:
-        dist, idx = _knn_dense_new(flat, k)
+        dist, idx = knn_dense_arrays(flat, k)
         if len(lead) == 1:
             return dist, idx
         return dist.reshape(*lead, n, k), idx.reshape(*lead, n, k)

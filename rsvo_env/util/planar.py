@@ -74,7 +74,7 @@ def as_rows(a: NDArray, shape: tuple[int, ...]) -> NDArray[np.float64]:
 
 
 @njit(cache=True)
-def _within(x, g, limit):
+def within_distance(x, g, limit):
     dx, dy = x[..., 0] - g[..., 0], x[..., 1] - g[..., 1]
     return np.sqrt(dx * dx + dy * dy) <= limit
 
@@ -84,7 +84,7 @@ def within(
 ) -> NDArray[np.bool_]:
     """(...): whether each row of ``positions`` (..., 2) is within ``limit`` of its target:
     ``norm(positions - targets) <= limit``, the same arithmetic in one compiled pass."""
-    return _within(positions, as_shape(targets, positions.shape), float(limit))
+    return within_distance(positions, as_shape(targets, positions.shape), float(limit))
 
 
 def clip_each(u: NDArray[np.float64], limit: float | NDArray) -> NDArray[np.float64]:
