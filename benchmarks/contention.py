@@ -11,7 +11,7 @@ before). Each process warms up, then counts agent-steps for a fixed wall time; t
 their sum. Rounds alternate the settings' order; the reference (one process,
 ``RSVO_NUM_THREADS=1 NUMBA_NUM_THREADS=1``) runs in every round, and each ratio is taken against
 its own round's reference. Also the kernel threshold: one solve of n independent QPs, one thread and
-two, in one process (``PARALLEL_THRESHOLD``).
+two, in one process (``sizes.PARALLEL_MIN_PROBLEMS``).
 
 Writes ``benchmarks/results/contention.md``.
 
@@ -89,7 +89,7 @@ def kernel_threshold(sizes=(64, 128, 256, 512, 1024, 4096), repeats: int = 200) 
     rng = np.random.default_rng(0)
     box = np.array([2.0, 2.0])
     rows = []
-    keep, threads.PARALLEL_THRESHOLD = threads.PARALLEL_THRESHOLD, 0
+    keep, sizes.PARALLEL_MIN_PROBLEMS = sizes.PARALLEL_MIN_PROBLEMS, 0
     try:
         for n in sizes:
             qps = (
@@ -110,7 +110,7 @@ def kernel_threshold(sizes=(64, 128, 256, 512, 1024, 4096), repeats: int = 200) 
                     times[k] = 1e6 * (time.perf_counter() - t) / repeats
             rows.append((n, times[1], times[CORES]))
     finally:
-        threads.PARALLEL_THRESHOLD = keep
+        sizes.PARALLEL_MIN_PROBLEMS = keep
     return rows
 
 
@@ -174,7 +174,7 @@ def write(path: Path, results: dict, kernel: list[tuple], args) -> None:
         f"One `exact.solve_csr` of n QPs of 8 rows, microseconds, one thread against {CORES}"
         " threads, in one process (the parallel kernel below its threshold forced for the"
         " measurement). The library goes parallel (when given threads) from"
-        " `PARALLEL_THRESHOLD` = 256.",
+        " `sizes.PARALLEL_MIN_PROBLEMS` = 256.",
         "",
         f"| n | one thread [us] | {CORES} threads [us] | {CORES} threads / one |",
         "|---|---|---|---|",

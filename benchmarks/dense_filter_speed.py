@@ -5,7 +5,7 @@ equal or 1..10) is stepped by the filter on plain arrays; every step is filtered
 same state, by the dense pass (``solvers.dense``, every pair) and by the general path (grid
 pair search, row packing, batched solve; forced with ``with_rows=True``), alternating blocks,
 the best of ``--repeats``. The two must agree bit for bit (checked here too). The size where
-the dense pass stops winning is ``solvers.dense.MAX_AGENTS``. Writes
+the dense pass stops winning is ``sizes.COMPILED_FILTER_MAX_AGENTS``. Writes
 ``benchmarks/results/dense_filter_speed.md``.
 
     python benchmarks/dense_filter_speed.py [--repeats 5]
@@ -21,10 +21,10 @@ from pathlib import Path
 import numpy as np
 
 from rsvo_env.control.nominal import move_to_goal
-from rsvo_env.filter import dense
 from rsvo_env.filter.config import FilterConfig
 from rsvo_env.filter.safety import SafetyFilter
 from rsvo_env.scenarios import Crowd
+from rsvo_env.util import sizes
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZES = (32, 64, 100, 150, 200, 256, 300, 350, 512)
@@ -69,7 +69,7 @@ def main() -> None:
             for x, u in seq[:3]:  # equal bit for bit (and compiled) before timing
                 a = flt.apply(x, u, theta).actions
                 b = flt.apply(x, u, theta, with_rows=True).actions
-                if n <= dense.MAX_AGENTS and not np.array_equal(a, b):
+                if n <= sizes.COMPILED_FILTER_MAX_AGENTS and not np.array_equal(a, b):
                     raise AssertionError(f"N = {n}: the two paths disagree")
 
             def dense_pass(flt=flt, seq=seq, theta=theta) -> None:
@@ -98,7 +98,8 @@ def main() -> None:
             f"thread, Python {platform.python_version()}). Microseconds per agent per filtered "
             f"step of the `crowd` scenario (40 steps, the best of {args.repeats} alternating "
             "blocks); both paths give the same actions bit for bit. The filter takes the dense "
-            f"pass up to `solvers.dense.MAX_AGENTS` = {dense.MAX_AGENTS} agents an env.",
+            "pass up to `sizes.COMPILED_FILTER_MAX_AGENTS` = "
+            f"{sizes.COMPILED_FILTER_MAX_AGENTS} agents an env.",
             "",
             "| N | dense, theta equal [µs] | general [µs] | dense / general "
             "| dense, theta 1..10 [µs] | general [µs] | dense / general |",

@@ -7,7 +7,7 @@ thread. This times both forms of the dense filter pass (``solvers.dense``) on ``
 (E envs x N agents, move-to-goal, 100 steps in) and of the exact solver over rows stored by
 agent (``solvers.exact.solve_csr``, the rows of one crowd of N agents), alternating, the best of
 ``--repeats`` blocks, both forms checked equal bit for bit.
-``rsvo_env.util.threads.OUTLINED_THRESHOLD``
+``rsvo_env.util.sizes.PRANGE_FORM_MIN_AGENTS``
 is where the prange form starts to win. Writes ``benchmarks/results/kernel_forms.md``.
 
     python benchmarks/kernel_forms.py [--repeats 5]
@@ -27,7 +27,7 @@ import numpy as np
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.filter import dense
 from rsvo_env.qp import exact
-from rsvo_env.util import threads
+from rsvo_env.util import sizes
 
 ROOT = Path(__file__).resolve().parents[1]
 DENSE_SIZES = ((6, 1), (32, 1), (6, 8), (100, 1), (6, 32), (16, 32), (4, 256), (64, 32), (350, 1))
@@ -140,7 +140,7 @@ def main() -> None:
             f"{numba.__version__}, Python {platform.python_version()}, one thread). Microseconds a "
             f"call, the best of {args.repeats} alternating blocks; both forms give the same "
             "outputs bit for bit. The library calls the prange form from "
-            f"`threads.OUTLINED_THRESHOLD` = {threads.OUTLINED_THRESHOLD} agents a call "
+            f"`sizes.PRANGE_FORM_MIN_AGENTS` = {sizes.PRANGE_FORM_MIN_AGENTS} agents a call "
             "(`rsvo_env/util/threads.py`).",
             "",
             "| kernel | N x E | agents a call | serial [µs] | prange, one thread [µs] "

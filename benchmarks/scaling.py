@@ -34,12 +34,12 @@ import numpy as np
 from rsvo_env.control.nominal import move_to_goal
 from rsvo_env.dynamics import MODELS, double_integrator_step
 from rsvo_env.dynamics.unicycle import unicycle_step
-from rsvo_env.filter import dense
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
 from rsvo_env.geometry.bodies import Bodies
 from rsvo_env.qp import exact
 from rsvo_env.scenarios import Crowd
+from rsvo_env.util import sizes
 from rsvo_env.util.neighbors import nearest_distance
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -264,7 +264,7 @@ def big_crowd(mode: str, n: int, steps: int) -> dict:
     imports hold (sampled after the setup and after every step)."""
     # compile first (numba's own memory is not the crowd's), on a crowd beyond the compiled
     # all-pairs pass, so that the kernels of the general path are the ones compiled
-    Ours(2 * dense.MAX_AGENTS, spread=False).step()
+    Ours(2 * sizes.COMPILED_FILTER_MAX_AGENTS, spread=False).step()
     base = peak = rss()
     t0 = time.perf_counter()
     if mode == "env":

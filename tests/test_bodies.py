@@ -6,11 +6,11 @@ and the reference solver in agreement, in any units."""
 import numpy as np
 import pytest
 
-from rsvo_env.filter import dense as dense_solver
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
 from rsvo_env.geometry.bodies import Bodies
 from rsvo_env.qp import solve as solvers
+from rsvo_env.util import sizes
 
 
 def scene(n: int, seed: int, scale: float = 1.0):
@@ -90,7 +90,7 @@ def test_culled_equals_all_pairs(n, seed):
         x = x + dt * res.actions
 
 
-@pytest.mark.parametrize("n", [60, 100, dense_solver.MAX_AGENTS])
+@pytest.mark.parametrize("n", [60, 100, sizes.COMPILED_FILTER_MAX_AGENTS])
 def test_compiled_dense_pass_equals_the_general_path(n):
     """Up to the dense kernel's size, on both sides of the size where the general path stops
     examining every pair and searches a grid per agent."""

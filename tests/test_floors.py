@@ -11,7 +11,7 @@ from test_culling import all_pairs_actions, crowd, moving
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
 from rsvo_env.responsibility.svo import weight_matrix
-from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
+from rsvo_env.util import sizes
 
 
 @settings(max_examples=200, deadline=None)
@@ -55,7 +55,7 @@ def test_culled_equals_all_pairs_at_extreme_ratios(ratio, scale):
     u = 2.0 * scale
     nominal = rng.uniform(-u, u, (n, 2))
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=scale, u_max=u, dt=0.01))
-    assert n > DENSE_MAX_AGENTS  # the per-agent search, not all pairs
+    assert n > sizes.ALL_PAIRS_MAX_AGENTS  # the per-agent search, not all pairs
     res = flt.filter(x, nominal, theta)
     want = all_pairs_actions(flt, x, nominal, theta)
     np.testing.assert_allclose(res.actions, want, rtol=0, atol=1e-12 * u)

@@ -251,3 +251,17 @@ def test_the_private_name_finder_finds_both_forms(tmp_path):
     (pkg / "c.py").write_text("from rsvo_env import a\n\na._hidden()\n")
     found = private_names_crossing(pkg)
     assert sorted(f.split(" ")[0] for f in found) == ["b.py:1", "c.py:3"], found
+
+
+def test_the_size_thresholds_have_one_owner():
+    """Every module-level number that bounds a size (``*_MAX_*``, ``*_MIN_*``) where the library
+    changes its method lives in util/sizes.py; the others read ``sizes.NAME``."""
+    import re
+
+    pattern = re.compile(r"^[A-Z_]*_(MAX|MIN)_[A-Z_]*\s*=\s*[0-9]", re.MULTILINE)
+    owners = [
+        p.relative_to(PACKAGE).as_posix()
+        for p in PACKAGE.rglob("*.py")
+        if pattern.search(p.read_text())
+    ]
+    assert owners == ["util/sizes.py"], owners

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env.util import neighbors
+from rsvo_env.util import sizes
 from rsvo_env.util.neighbors import _knn_inserted, _knn_lanes, _knn_ranked, nearest_neighbors
 
 
@@ -47,7 +47,7 @@ def run(kernel, x: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
 @given(
     seed=st.integers(0, 2**32 - 1),
     e=st.integers(1, 4),
-    n=st.integers(2, neighbors.DENSE_MAX_AGENTS),
+    n=st.integers(2, sizes.ALL_PAIRS_MAX_AGENTS),
     k_share=st.floats(0.0, 1.0),
     scale=st.sampled_from([1e-6, 1e-3, 1.0, 1e3, 1e6]),
     lattice=st.booleans(),
@@ -63,7 +63,7 @@ def test_both_kernels_are_the_stable_sort(seed, e, n, k_share, scale, lattice):
 
 
 @pytest.mark.parametrize(
-    "e", [1, 3, 16, 17, neighbors.LANES_MIN_ENVS - 1, neighbors.LANES_MIN_ENVS]
+    "e", [1, 3, 16, 17, sizes.KNN_LANES_MIN_ENVS - 1, sizes.KNN_LANES_MIN_ENVS]
 )
 @pytest.mark.parametrize("n", [2, 7, 8, 16, 32, 33, 64])
 @pytest.mark.parametrize("k", [1, 3, 4, 6])

@@ -12,14 +12,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rsvo_env.dynamics import barriers
-from rsvo_env.filter import dense as dense_solver
 from rsvo_env.filter import projection_disk
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
 from rsvo_env.qp import exact
 from rsvo_env.scenarios import Crowd
-from rsvo_env.util import grid
-from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
+from rsvo_env.util import grid, sizes
 
 
 def every_row(flt, x, nominal, theta, cull=False):
@@ -103,7 +101,7 @@ def crowd(n, seed):
 
 
 @pytest.mark.parametrize("kind", ["inside", "outside", "corners", "zero", "mixed"])
-@pytest.mark.parametrize("too_close", [0, 3, 2 * projection_disk.SCAN_MAX])
+@pytest.mark.parametrize("too_close", [0, 3, 2 * sizes.EXEMPT_SCAN_MAX_AGENTS])
 def test_the_large_crowd_search_keeps_every_row_that_can_bind(kind, too_close):
     """900 agents, theta 1..10 with zeros (the per-agent grid search), some pairs already
     closer than R (a few: each scans its env with its box's radius; many: the grid does):
@@ -119,7 +117,7 @@ def test_the_large_crowd_search_keeps_every_row_that_can_bind(kind, too_close):
     theta[:2] = 0.0
     nominal = nominals(rng, n, 2.0, kind)
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0, dt=0.05))
-    assert n > dense_solver.MAX_AGENTS
+    assert n > sizes.COMPILED_FILTER_MAX_AGENTS
     res = flt.filter(x, nominal, theta)
     want, ok = every_row(flt, x, nominal, theta)[:2]
     np.testing.assert_array_equal(res.feasible, ok)
@@ -186,7 +184,7 @@ def test_the_box_pairs_of_exempt_agents_join_the_search(many):
     radius = rng.uniform(0.5, 4.0, (E, n, K))
     group = rng.integers(0, K, (E, n))
     exempt = rng.uniform(size=E * n) < (0.5 if many else 0.02)
-    assert (exempt.sum() > projection_disk.SCAN_MAX) == many
+    assert (exempt.sum() > sizes.EXEMPT_SCAN_MAX_AGENTS) == many
     I0, J0 = grid.pairs_within_radii(x, rng.uniform(0.0, 2.0, (E, n, K)), group)
     I, J = projection_disk.box_pairs(x, radius, group, exempt, I0, J0)
     want = set(zip(I0.tolist(), J0.tolist(), strict=True))
@@ -197,4 +195,4 @@ def test_the_box_pairs_of_exempt_agents_join_the_search(many):
             if j != i and d2 <= radius[e, i, group[e, j]] ** 2:
                 want.add((e * n + min(i, j), e * n + max(i, j)))
     np.testing.assert_array_equal(np.stack([I, J], 1), np.array(sorted(want)))
-    assert n > DENSE_MAX_AGENTS
+    assert n > sizes.ALL_PAIRS_MAX_AGENTS

@@ -1,8 +1,8 @@
-"""R-ORCA's stage for envs of at most DENSE_MAX_AGENTS agents (``rsvo_env/control/rorca_dense.py``):
-each agent reads the others of its env in place and its weights from the env's matrix, and the
-velocities are bit for bit those of the grid stage (``rsvo_env/control/rorca_grid.py``, the one
-for larger envs) run on the same envs; the simulation core hands it its own matrices, kept
-current."""
+"""R-ORCA's stage for envs of at most sizes.ALL_PAIRS_MAX_AGENTS agents
+(``rsvo_env/control/rorca_dense.py``): each agent reads the others of its env in place and its
+weights from the env's matrix, and the velocities are bit for bit those of the grid stage
+(``rsvo_env/control/rorca_grid.py``, the one for larger envs) run on the same envs; the
+simulation core hands it its own matrices, kept current."""
 
 import numpy as np
 import pytest

@@ -142,10 +142,11 @@ def halves(theta):
 
 @pytest.mark.parametrize("env1_mode", ["asymmetric", "symmetric", "callable"])
 def test_weights_from_scores_are_the_matrix(monkeypatch, env1_mode):
-    """Beyond DENSE_MAX agents the core keeps no weight matrix: observations, safe actions and
-    rewards are those of the matrix, through auto-resets, and world.omega is still the matrix."""
+    """Beyond sizes.WEIGHT_MATRIX_MAX_AGENTS agents the core keeps no weight matrix: observations,
+    safe actions and rewards are those of the matrix, through auto-resets, and world.omega is
+    still the matrix."""
     from rsvo_env.envs.world import World
-    from rsvo_env.sim import weights
+    from rsvo_env.util import sizes
 
     callable_mode = halves if env1_mode == "callable" else None
     mode = callable_mode or env1_mode
@@ -154,7 +155,7 @@ def test_weights_from_scores_are_the_matrix(monkeypatch, env1_mode):
         venv.sim.set_weighting(1, mode)  # env 1 differs from env 0 (asymmetric)
 
     kept, kept_out = run_batch(70, setup)
-    monkeypatch.setattr(weights, "DENSE_MAX", 50)
+    monkeypatch.setattr(sizes, "WEIGHT_MATRIX_MAX_AGENTS", 50)
     lazy, lazy_out = run_batch(70, setup)
     assert kept.sim.weights.matrix is not None
     # only a callable weighting makes the core keep its matrix

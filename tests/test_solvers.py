@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from instances import KINDS, make_batch, make_instance, stack
 
 from rsvo_env.qp import exact, reference
-from rsvo_env.util import threads
+from rsvo_env.util import sizes, threads
 
 
 def _compare(solver: str, K: int, count: int, seed: int, tol: float) -> dict:
@@ -105,7 +105,7 @@ def test_masked_rows_are_ignored():
 
 def test_parallel_batch_equals_serial():
     rng = np.random.default_rng(3)
-    instances = make_batch(rng, 2 * threads.PARALLEL_THRESHOLD + 10, 8)
+    instances = make_batch(rng, 2 * sizes.PARALLEL_MIN_PROBLEMS + 10, 8)
     nominal, A, b, mask, lo, hi = stack(instances)
     with threads.using(numba.config.NUMBA_NUM_THREADS):
         assert threads.parallel(len(instances)) == (numba.config.NUMBA_NUM_THREADS > 1)

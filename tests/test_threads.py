@@ -14,7 +14,7 @@ from checkout import checkout_env, run_python
 
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.qp import exact
-from rsvo_env.util import threads
+from rsvo_env.util import sizes, threads
 
 ROOT = Path(__file__).resolve().parents[1]
 POOL = numba.config.NUMBA_NUM_THREADS
@@ -27,8 +27,8 @@ def test_one_thread_unless_opted_in():
     if POOL > 1:
         with threads.using(2):
             assert threads.get_num_threads() == 2
-            assert threads.parallel(threads.PARALLEL_THRESHOLD)
-            assert not threads.parallel(threads.PARALLEL_THRESHOLD - 1)
+            assert threads.parallel(sizes.PARALLEL_MIN_PROBLEMS)
+            assert not threads.parallel(sizes.PARALLEL_MIN_PROBLEMS - 1)
     assert threads.get_num_threads() == int(os.environ.get(threads.ENV_VAR, "1"))
 
 
@@ -46,7 +46,7 @@ def test_the_solver_puts_back_the_callers_numba_thread_count(caller):
     """``exact.solve_batch`` over enough problems to run in parallel on 2 threads: numba's count
     for the calling thread is the caller's after it (it was left at the library's)."""
     rng = np.random.default_rng(0)
-    n = 4 * threads.PARALLEL_THRESHOLD
+    n = 4 * sizes.PARALLEL_MIN_PROBLEMS
     A, b = rng.normal(size=(n, 3, 2)), rng.normal(size=(n, 3))
     before = numba.get_num_threads()
     numba.set_num_threads(caller)
@@ -102,12 +102,12 @@ def test_one_thread_takes_the_prange_form_from_its_threshold_on_one_thread():
         return "prange"
 
     with threads.using(1):
-        assert threads.launch(serial, prange, threads.OUTLINED_THRESHOLD) == "prange"
-        assert threads.launch(serial, prange, threads.OUTLINED_THRESHOLD - 1) == "serial"
+        assert threads.launch(serial, prange, sizes.PRANGE_FORM_MIN_AGENTS) == "prange"
+        assert threads.launch(serial, prange, sizes.PRANGE_FORM_MIN_AGENTS - 1) == "serial"
         assert threads.launch(serial, prange, 10**6) == "prange"
     if POOL > 1:
         with threads.using(2):
-            assert threads.launch(serial, prange, threads.PARALLEL_THRESHOLD) == "prange"
+            assert threads.launch(serial, prange, sizes.PARALLEL_MIN_PROBLEMS) == "prange"
     assert seen == [1, 1] + ([2] if POOL > 1 else [])
 
 

@@ -14,9 +14,9 @@ The velocity is the one closest to the preferred velocity within the half-planes
 disk, by ORCA's own linear programs (``rsvo_env.qp.disk``); where they leave no room, the
 velocity of the disk whose largest violation is least (ORCA's third). The R-CBF
 filter on top keeps the guarantee whatever this controller proposes. Envs of at most
-``DENSE_MAX_AGENTS`` agents run :mod:`rsvo_env.control.rorca_dense`'s stage (the env's agents
-read in place, the weights from its matrix); larger ones this module's, over the pairs of the
-grid search.
+``sizes.ALL_PAIRS_MAX_AGENTS`` agents run :mod:`rsvo_env.control.rorca_dense`'s stage (the
+env's agents read in place, the weights from its matrix); larger ones this module's, over the
+pairs of the grid search.
 """
 
 from __future__ import annotations
@@ -229,7 +229,7 @@ def rorca_velocities(
     own = goal_held is not None and goals is not None
     goal_hold = np.ascontiguousarray(goal_held, np.bool_).reshape(M) if own else hold
     compiled = (flags.reshape(M), hold, tied, float(reach), goal_hold)
-    if n > sizes.DENSE_MAX_AGENTS:  # a grid scan for each agent's K nearest, ORCA's way
+    if n > sizes.ALL_PAIRS_MAX_AGENTS:  # a grid scan for each agent's K nearest, ORCA's way
         if omega is None and any(callable(m) for m in modes):
             omega = rorca_dense.matrices(theta, modes)
         out = rorca_grid.stage(n, motion, theta, symmetric_envs(modes), omega, compiled, settings)

@@ -1,4 +1,4 @@
-"""R-ORCA's compiled stage for envs of at most ``DENSE_MAX_AGENTS`` agents: each agent's
+"""R-ORCA's compiled stage for envs of at most ``sizes.ALL_PAIRS_MAX_AGENTS`` agents: each agent's
 candidates are the others of its env within the cut, read in place, and its weights straight
 from the env's weight matrix (E, N, N), which the simulation core keeps
 (``rsvo_env.sim.weights``): no pair list, no neighbour lists, no weights computed again. The

@@ -1,9 +1,9 @@
-"""R-ORCA's compiled stage for envs of more than ``DENSE_MAX_AGENTS`` agents, ORCA's way, in one
-call: each agent scans a grid of its env for its K nearest neighbours within the cut (where
-ORCA queries a k-d tree), with no pair list and no neighbour lists, and a weight is computed
-only for a pair kept. The agents are visited in cell order, reading copies of their data laid
-out in that order, so a neighbourhood is a few runs of consecutive memory (a crowd of 10,000 in
-index order misses the cache at nearly every neighbour).
+"""R-ORCA's compiled stage for envs of more than ``sizes.ALL_PAIRS_MAX_AGENTS`` agents, ORCA's way,
+in one call: each agent scans a grid of its env for its K nearest neighbours within the cut (where
+ORCA queries a k-d tree), with no pair list and no neighbour lists, and a weight is computed only
+for a pair kept. The agents are visited in cell order, reading copies of their data laid out in that
+order, so a neighbourhood is a few runs of consecutive memory (a crowd of 10,000 in index order
+misses the cache at nearly every neighbour).
 
 The velocities are bit for bit those R-ORCA assembled pair by pair gives (``tests/test_rorca.py``)
 and the dense stage's (``rsvo_env.control.rorca_dense``): the same candidates (within the cut,

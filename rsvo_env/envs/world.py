@@ -42,7 +42,7 @@ class World:
     @property
     def omega(self) -> NDArray[np.float64]:
         """The (N, N) weight matrix (Thm. 1): the kept one, or computed now from the scores
-        for a crowd beyond ``weights.DENSE_MAX`` agents."""
+        for a crowd beyond ``sizes.WEIGHT_MATRIX_MAX_AGENTS`` agents."""
         s = self._sim.state
         return _read_only(
             self._sim.weights.env_matrix(self._e, s.theta[self._e], s.weighting[self._e])

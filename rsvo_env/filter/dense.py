@@ -16,10 +16,9 @@ from numpy.typing import NDArray
 from rsvo_env.dynamics.barriers import single_integrator_row, support
 from rsvo_env.filter.projection_disk import disk_support
 from rsvo_env.qp.exact import solve_rows
-from rsvo_env.util import sizes, threads
+from rsvo_env.util import threads
 
 # Up to this many agents an env the compiled all-pairs pass serves (rsvo_env.util.sizes).
-MAX_AGENTS = sizes.DENSE_KERNEL_MAX_AGENTS
 
 
 @njit(cache=True, inline="always")

@@ -26,13 +26,11 @@ from rsvo_env.geometry import pairs
 from rsvo_env.geometry.bodies import Bodies
 from rsvo_env.geometry.pairs import Floor
 from rsvo_env.qp.rows import Rows, storage
-from rsvo_env.util import grid
+from rsvo_env.util import grid, sizes
 
 if TYPE_CHECKING:
     from rsvo_env.filter.config import FilterConfig
 
-# up to this many exempt agents, each scans its env; more share the grid search
-SCAN_MAX = 64
 # the disk's support is exact only in exact arithmetic: a row this close to it (relative to
 # |a| |ū|) stays
 MARGIN = 1e-9
@@ -113,7 +111,7 @@ def box_pairs(
     E, n = positions.shape[:2]
     x = np.ascontiguousarray(positions, dtype=np.float64)
     who = np.flatnonzero(exempt)
-    if len(who) <= SCAN_MAX:
+    if len(who) <= sizes.EXEMPT_SCAN_MAX_AGENTS:
         I2, J2 = _scan(x, who, np.ascontiguousarray(box_radii), group)
     else:  # many: the grid, each agent but the exempt searching nothing
         radii = np.where(exempt.reshape(E, n)[..., None], box_radii, 0.0)

@@ -38,7 +38,7 @@ from rsvo_env.responsibility.svo import (
     validate_weight_matrix,
     weight_matrix,
 )
-from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
+from rsvo_env.util import sizes
 from rsvo_env.util.planar import norm, turn
 from rsvo_env.util.validation import check_theta, check_vectors, real_array
 
@@ -241,10 +241,10 @@ class SafetyFilter:
                 bodies = self._default_bodies[(E, n)] = Bodies.of(cfg, E, n)
         if obstacles is not None and len(obstacles) == 0:
             obstacles = None
-        dense = n <= DENSE_MAX_AGENTS and cfg.neighbor_radius is None
+        dense = n <= sizes.ALL_PAIRS_MAX_AGENTS and cfg.neighbor_radius is None
         fast = not with_rows and obstacles is None and cfg.model.dense_kernel
         if fast and cfg.solver == "exact" and cfg.neighbor_radius is None:
-            if n <= dense_solver.MAX_AGENTS:  # the compiled all-pairs pass
+            if n <= sizes.COMPILED_FILTER_MAX_AGENTS:  # the compiled all-pairs pass
                 omega = self._matrix(theta, weighting) if omega is None else omega
                 return self._apply_dense(positions, nominal, omega, bodies)
         solve_box = bodies

@@ -20,8 +20,7 @@ from rsvo_env.responsibility.svo import (
     symmetric_envs,
     weight_matrix,
 )
-from rsvo_env.util import grid
-from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
+from rsvo_env.util import grid, sizes
 
 # (floor (E, N, K), group (E, N), required pairs (P, 2)): see weight_floor and theta_floor
 Floor = tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]
@@ -217,7 +216,7 @@ def candidate_pairs(
     if n < 2:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
-    if np.isfinite(radius) and radius > 0.0 and n > DENSE_MAX_AGENTS:
+    if np.isfinite(radius) and radius > 0.0 and n > sizes.ALL_PAIRS_MAX_AGENTS:
         # the compiled grid: the same pairs, sorted, without a tree's Python-level lists
         return grid.pairs_within_radii(positions, np.full((E, n), float(radius)))
     I, J = all_pairs(n, E)

@@ -36,8 +36,7 @@ from rsvo_env.sim.metrics import EpisodeMetrics
 from rsvo_env.sim.reset_options import check_options
 from rsvo_env.sim.state import State
 from rsvo_env.sim.weights import Weights
-from rsvo_env.util import planar
-from rsvo_env.util.neighbors import DENSE_MAX_AGENTS
+from rsvo_env.util import planar, sizes
 from rsvo_env.util.validation import check_count, check_real, shown
 
 # the reward's weights (``rewards=``): progress toward the goal, the time cost, the goal bonus,
@@ -119,8 +118,8 @@ class Simulator:
         self.radii = scenario.radii  # (N,) body radii
         self.plain = scenario.plain  # identical bodies, one bound, no obstacles: kept once
         self.state = State.empty(self.num_envs, n, self.k, scenario.num_obstacles)
-        # up to weights.DENSE_MAX (1,024) agents the matrices exist from the start and Weights
-        # writes them in place: the state holds the very arrays, for R-ORCA to read
+        # up to sizes.WEIGHT_MATRIX_MAX_AGENTS (1,024) agents the matrices exist from the start
+        # and Weights writes them in place: the state holds the very arrays, for R-ORCA to read
         self.state.omega = self.weights.matrix
         self._bodies: dict[int, Bodies | None] = {}
         self.metrics = EpisodeMetrics(
@@ -282,7 +281,7 @@ class Simulator:
     # ---- the step ---------------------------------------------------------------------------
     def _floor(self) -> Floor | None:
         """The weights' floor for the large-N pair search (:meth:`Weights.floor`)."""
-        if self.n <= DENSE_MAX_AGENTS:
+        if self.n <= sizes.ALL_PAIRS_MAX_AGENTS:
             return None
         return self.weights.floor(self.state.theta, self.state.weighting)
 

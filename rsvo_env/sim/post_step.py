@@ -24,7 +24,8 @@ from rsvo_env.geometry.clearance import contact
 from rsvo_env.scenarios.base import Scenario, reward_terms
 from rsvo_env.sim.metrics import accumulate_step
 from rsvo_env.sim.view import SimulatorView
-from rsvo_env.util.neighbors import DENSE_MAX_AGENTS, knn_dense_arrays, nearest_neighbors
+from rsvo_env.util import sizes
+from rsvo_env.util.neighbors import knn_dense_arrays, nearest_neighbors
 from rsvo_env.util.planar import within_distance
 
 _HOOKS = ("at_goal", "right_hand_active", "reward")
@@ -34,7 +35,7 @@ def fusable(scenario: Scenario, n: int) -> bool:
     """Whether :func:`fused` serves this scenario: its hooks are the base ones, and N is small
     enough for the dense neighbour search."""
     base = all(getattr(type(scenario), h) is getattr(Scenario, h) for h in _HOOKS)
-    return base and scenario.plain and 2 <= n <= DENSE_MAX_AGENTS
+    return base and scenario.plain and 2 <= n <= sizes.ALL_PAIRS_MAX_AGENTS
 
 
 def derive(sim: SimulatorView, envs: NDArray[np.int64] | None = None) -> None:

@@ -52,7 +52,7 @@ class State:
     # rsvo_env.control.stall), a copy per step; R-ORCA reads it
     # (rsvo_env.control.rorca.HOLD_SECONDS)
     no_progress: NDArray[np.int64] | None = None
-    # (E, N, N) the core's weight matrices where it keeps them (rsvo_env.sim.weights.DENSE_MAX,
+    # (E, N, N) the core's weight matrices where it keeps them (sizes.WEIGHT_MATRIX_MAX_AGENTS,
     # 1,024 agents), the very arrays, for R-ORCA to read rather than compute; else None
     omega: NDArray[np.float64] | None = None
 

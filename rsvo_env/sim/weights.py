@@ -1,10 +1,10 @@
 """The responsibility weights the simulation core keeps for its E envs (paper, Thm. 1).
 
-Up to ``DENSE_MAX`` agents an env, or whenever a callable weighting asks for one, the core keeps
-the (E, N, N) matrices of :func:`responsibility.weight_matrix`. Beyond that a named weighting
-needs only the scores: each weight is computed where it is read, by the matrix's own
-convention (``pair_omega(theta_i, theta_j)`` above the diagonal, ``1 - W.T`` below), so a crowd
-of 10,000 holds O(N) weights, not 800 MB.
+Up to ``sizes.WEIGHT_MATRIX_MAX_AGENTS`` agents an env, or whenever a callable weighting asks for
+one, the core keeps the (E, N, N) matrices of :func:`responsibility.weight_matrix`. Beyond that a
+named weighting needs only the scores: each weight is computed where it is read, by the matrix's own
+convention (``pair_omega(theta_i, theta_j)`` above the diagonal, ``1 - W.T`` below), so a crowd of
+10,000 holds O(N) weights, not 800 MB.
 """
 
 from __future__ import annotations
@@ -27,7 +27,6 @@ from rsvo_env.responsibility.svo import (
 from rsvo_env.util import sizes
 
 # Agents an env up to which the weight matrix is kept (rsvo_env.util.sizes).
-DENSE_MAX = sizes.WEIGHT_MATRIX_MAX_AGENTS
 
 
 class Weights:
@@ -36,7 +35,7 @@ class Weights:
     def __init__(self, num_envs: int, n: int) -> None:
         self.n = n
         self.matrix: NDArray[np.float64] | None = (
-            np.full((num_envs, n, n), 0.5) if n <= DENSE_MAX else None
+            np.full((num_envs, n, n), 0.5) if n <= sizes.WEIGHT_MATRIX_MAX_AGENTS else None
         )
         self.omega_min = np.full(num_envs, 0.5)
         self.version = 0

@@ -14,9 +14,6 @@ from scipy.spatial import cKDTree
 
 from rsvo_env.util import grid, sizes
 
-# Below this many agents all pairs are cheaper than a KD-tree (rsvo_env.util.sizes).
-DENSE_MAX_AGENTS = sizes.DENSE_MAX_AGENTS
-
 
 def env_offsets(positions: NDArray[np.float64], margin: float = 0.0) -> NDArray[np.float64]:
     """Shift (E, 1, 2) that puts env e's agents beyond any neighbour search of env e - 1.
@@ -32,26 +29,15 @@ def env_offsets(positions: NDArray[np.float64], margin: float = 0.0) -> NDArray[
     return shift
 
 
-# Which kernel serves which batch (measured with benchmarks/knn_speed.py, one thread, on positions
-# drifting as an env steps them). Insertion costs ~n^2 k with a branch per candidate, which the
-# predictor learns while a step's E n agents are few and their order changes little; ranking
-# ~n^3 per env whatever k, without branches; the env-lanes kernel inserts branch-free into all
-# envs at once, vectorised across envs, with a fixed cost per (agent, neighbour, slot) that only
-# many envs amortise.
-INSERTION_MAX_AGENTS = 512
-LANES_MIN_ENVS = 64
-RANKED_MIN_AGENTS, RANKED_MAX_AGENTS = 8, 32
-
-
 @njit(cache=True)
 def kernel_for(E, n):
     """The kernel :func:`_knn_dense` runs on E envs of n agents: 0 insertion, 1 ranking, 2 env
     lanes."""
-    if E * n <= INSERTION_MAX_AGENTS:
+    if E * n <= sizes.KNN_INSERTION_MAX_AGENTS:
         return 0
-    if E >= LANES_MIN_ENVS:
+    if E >= sizes.KNN_LANES_MIN_ENVS:
         return 2
-    if RANKED_MIN_AGENTS <= n <= RANKED_MAX_AGENTS:
+    if sizes.KNN_RANKED_MIN_AGENTS <= n <= sizes.KNN_RANKED_MAX_AGENTS:
         return 1
     return 0
 
@@ -211,7 +197,7 @@ def nearest_neighbors(
     flat = np.asarray(positions, dtype=np.float64)
     if flat.ndim != 3:
         flat = flat.reshape(-1, n, 2)
-    if n <= DENSE_MAX_AGENTS:
+    if n <= sizes.ALL_PAIRS_MAX_AGENTS:
         dist, idx = knn_dense_arrays(flat, k)
         if len(lead) == 1:
             return dist, idx

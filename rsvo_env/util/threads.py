@@ -7,7 +7,8 @@ and the step becomes many times slower than one thread's (``benchmarks/results/c
 One thread cannot stall, and the library's throughput tables are measured with one. A process
 that has its cores to itself opts in: ``RSVO_NUM_THREADS=2`` in the environment, or
 :func:`set_num_threads` (:func:`using` for a block). Kernels then run in parallel over at least
-:data:`PARALLEL_THRESHOLD` independent problems, below which a launch costs more than it saves.
+``sizes.PARALLEL_MIN_PROBLEMS`` independent problems, below which a launch costs more than it
+saves.
 """
 
 from __future__ import annotations
@@ -20,20 +21,12 @@ from typing import Any
 import numba
 import numpy as np
 
+from rsvo_env.util import sizes
 from rsvo_env.util.validation import shown
 
 ENV_VAR = "RSVO_NUM_THREADS"
-# independent QPs a call below which a parallel launch costs more than the work (measured:
-# benchmarks/results/contention.md, kernel section)
-PARALLEL_THRESHOLD = 256
-# Agents a call from which a kernel's prange form, run on one thread, beats its serial form:
-# numba compiles a prange body as a function of its own whose arrays it marks free of aliasing
-# (parfor lowering), and the compiler then keeps the inner loops' values in registers. On one
-# thread a launch costs about 1 us and waits for no other thread, so it cannot stall under
-# load. Measured for the dense filter pass and the CSR solve (benchmarks/kernel_forms.py): the
-# prange form takes 1.35x the serial form's time at 6 agents, 1.10x at 32, 0.61x to 0.99x from
-# 48 on
-OUTLINED_THRESHOLD = 64
+# the sizes at which a kernel changes form: sizes.PARALLEL_MIN_PROBLEMS (several threads) and
+# sizes.PRANGE_FORM_MIN_AGENTS (the prange form on one thread), measured there
 
 
 def _checked(value: object, name: str) -> int:
@@ -80,18 +73,18 @@ def using(n: int) -> Iterator[None]:
 
 def parallel(work: int) -> bool:
     """The one rule for running in parallel: opted in, and at least
-    :data:`PARALLEL_THRESHOLD` independent problems (``work``). It sets nothing: :func:`launch`
+    ``sizes.PARALLEL_MIN_PROBLEMS`` independent problems (``work``). It sets nothing: :func:`launch`
     sets numba's count for the launch and puts the caller's back."""
-    return _threads > 1 and work >= PARALLEL_THRESHOLD
+    return _threads > 1 and work >= sizes.PARALLEL_MIN_PROBLEMS
 
 
 def launch(serial: Callable, prange: Callable, work: int, *args: Any) -> Any:
     """Call the form of a kernel that pays over ``work`` agents: its ``prange`` form on the
     library's threads in parallel (:func:`parallel`'s rule) or on one thread from
-    :data:`OUTLINED_THRESHOLD` agents (faster than the plain loop there), else ``serial``.
+    ``sizes.PRANGE_FORM_MIN_AGENTS`` agents (faster than the plain loop there), else ``serial``.
     numba's thread count for the calling thread, which a user's own kernels read, is set for
     the launch only and put back after it."""
-    n = _threads if parallel(work) else int(work >= OUTLINED_THRESHOLD)
+    n = _threads if parallel(work) else int(work >= sizes.PRANGE_FORM_MIN_AGENTS)
     if not n:
         return serial(*args)
     caller = numba.get_num_threads()
