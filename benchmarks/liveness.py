@@ -48,9 +48,9 @@ from liveness_report import (  # a sibling module: benchmarks/ is the script's o
 
 from rsvo_env.control import rorca
 from rsvo_env.control.nominal import move_to_goal
+from rsvo_env.control.rorca.controller import ROUTED, UNROUTED
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.scenarios import paired_theta
-from rsvo_env.scenarios.crowd import ROUTED, UNROUTED
 from rsvo_env.util.neighbors import nearest_distance
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -40,7 +40,7 @@ def scores(n: int, case: str) -> np.ndarray:
 def footprint(n: int, case: str) -> dict:
     """In this process: pairs and bytes of one filter call on a crowd of n."""
     from rsvo_env.filter.safety import FilterConfig, SafetyFilter
-    from rsvo_env.geometry import pairs
+    from rsvo_env.responsibility import pair_weights
     from rsvo_env.scenarios import Crowd
 
     x = Crowd(num_agents=n, spacing_factor=1.0)._spread(np.random.default_rng(n))
@@ -64,7 +64,7 @@ def footprint(n: int, case: str) -> dict:
             "flat_capped",
         )
     )
-    floor_bytes = sum(a.nbytes for a in pairs.floor_of(theta[None], "asymmetric"))
+    floor_bytes = sum(a.nbytes for a in pair_weights.floor_of(theta[None], "asymmetric"))
     return {
         "pairs": int(rows.n_pairs),
         "rows": int(len(rows.flat_b)),

@@ -19,10 +19,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from scaling import DT, Orca  # noqa: E402
 
-from rsvo_env.control import rorca, rorca_route  # noqa: E402
+from rsvo_env.control import rorca  # noqa: E402
 from rsvo_env.control.nominal import move_to_goal  # noqa: E402
+from rsvo_env.control.rorca import route as rorca_route  # noqa: E402
+from rsvo_env.control.rorca.controller import ROUTED  # noqa: E402
 from rsvo_env.envs.vector import BatchedEnv  # noqa: E402
-from rsvo_env.scenarios.crowd import ROUTED  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -192,7 +193,7 @@ def main(argv: list[str] | None = None) -> int:
             for r in public
         ),
         "",
-        "Routing around knots (`rsvo_env.control.rorca_route`) timed on the same crowd, with its"
+        "Routing around knots (`rsvo_env.control.rorca.route`) timed on the same crowd, with its"
         " agents' velocities (ORCA's), and with every agent at rest: then every one counts as"
         " stuck, and every agent farther from its goal than the look-ahead probes every heading"
         " (the most the rule can cost; a knot of that size is what the rule keeps from forming).",
@@ -217,7 +218,7 @@ def main(argv: list[str] | None = None) -> int:
         "0.31x; at e36d75c, with ORCA's own linear programs within the speed disk "
         "(`rsvo_env.qp.disk`) after a grid pair search, its weights and neighbour lists, 0.66, "
         "0.67 and 0.57, and 0.36x; at 35df801, each agent's K nearest by a grid scan in cell "
-        "order in one compiled call (`rsvo_env.control.rorca_grid`), 0.41, 0.43 and 0.41, and "
+        "order in one compiled call (`rsvo_env.control.rorca.grid`), 0.41, 0.43 and 0.41, and "
         "0.35x. Since, the compiled stages hand their inlined helpers scalars and borrow their "
         "scratch (`rsvo_env.util.borrowed`): an array handed to an inlined numba function costs "
         "two atomic reference counts, and perf put a quarter of the dense stage's time in them; "

@@ -4,7 +4,7 @@ the definition (not through the filter), safe crowds, and clusters built at h = 
 import numpy as np
 
 from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.dynamics.backup_barrier import stopping_reach
+from rsvo_env.dynamics.barriers.stopping import stopping_reach
 from rsvo_env.geometry.obstacles import nearest_points
 
 

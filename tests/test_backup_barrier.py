@@ -11,9 +11,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 from segment_states import crowd_pair_h, seg_obstacle_h
 
-from rsvo_env.dynamics import backup_barrier as bb
 from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.dynamics import segment_barrier as sb
+from rsvo_env.dynamics.barriers import backup as bb
+from rsvo_env.dynamics.barriers import segment as sb
+from rsvo_env.dynamics.barriers import stopping
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
 from rsvo_env.geometry.obstacles import Obstacles
@@ -51,11 +52,11 @@ def test_the_backup_gives_up_at_least_the_reach_it_travels(s, angle, c, dt, scal
     """Lemma 1: |p+ - p| + L(|v+|) <= L(|v|) under the backup, which stays in the disk |a| <= c."""
     v = np.array([[np.cos(angle), np.sin(angle)]]) * s * scale
     c_ = np.array([c * scale])
-    beta = bb.backup_action(v, c_, dt)
+    beta = stopping.backup_action(v, c_, dt)
     assert np.linalg.norm(beta) <= c_[0] * (1 + 1e-12)
     p1, v1 = double_integrator_step(np.zeros((1, 2)), v, beta, dt)
-    before = bb.stopping_reach(np.linalg.norm(v, axis=1), c_, dt)[0]
-    after = bb.stopping_reach(np.linalg.norm(v1, axis=1), c_, dt)[0] + np.linalg.norm(p1)
+    before = stopping.stopping_reach(np.linalg.norm(v, axis=1), c_, dt)[0]
+    after = stopping.stopping_reach(np.linalg.norm(v1, axis=1), c_, dt)[0] + np.linalg.norm(p1)
     assert after <= before + 1e-12 * (before + scale * dt * dt * c)
 
 
@@ -66,22 +67,24 @@ def test_the_remainder_bounds_the_reach_over_the_trust_box(s, angle, c, dt, r, x
     |a - beta|_inf <= rho (here up to the box's far corner)."""
     v = np.array([[np.cos(angle), np.sin(angle)]]) * s * scale
     c_ = np.array([c * scale])
-    t = bb.agent_terms(v, -c_[:, None] * np.ones(2), c_[:, None] * np.ones(2), dt)
+    t = stopping.agent_terms(v, -c_[:, None] * np.ones(2), c_[:, None] * np.ones(2), dt)
     rho = r * 2.0 * c * scale
     a = t.beta + rho * (2.0 * np.array([[x, y]]) - 1.0)
     w = v + dt * a
-    lhs = bb.stopping_reach(np.linalg.norm(w, axis=1), c_, dt)[0]
+    lhs = stopping.stopping_reach(np.linalg.norm(w, axis=1), c_, dt)[0]
     wb = v + dt * t.beta
-    tangent = bb.stopping_reach(np.linalg.norm(wb, axis=1), c_, dt)[0] + (t.g * (a - t.beta)).sum()
-    bound = tangent + bb.remainder(np.array([rho]), c_, dt)[0]
+    tangent = (
+        stopping.stopping_reach(np.linalg.norm(wb, axis=1), c_, dt)[0] + (t.g * (a - t.beta)).sum()
+    )
+    bound = tangent + stopping.remainder(np.array([rho]), c_, dt)[0]
     assert lhs <= bound + 1e-12 * (abs(lhs) + scale * dt * dt * c)
 
 
 @given(tau=st.floats(0.0, 1e6), c=st.floats(1e-3, 1e3), dt=st.floats(1e-3, 2.0))
 def test_the_trust_radius_inverts_the_remainder(tau, c, dt):
-    rho = bb.trust_radius(np.array([tau]), np.array([c]), dt)
+    rho = stopping.trust_radius(np.array([tau]), np.array([c]), dt)
     assert rho[0] >= 0
-    assert bb.remainder(rho, np.array([c]), dt)[0] == pytest.approx(tau, rel=1e-9, abs=1e-300)
+    assert stopping.remainder(rho, np.array([c]), dt)[0] == pytest.approx(tau, rel=1e-9, abs=1e-300)
 
 
 # --- every QP feasible at h = 0 -------------------------------------------------------------
@@ -91,7 +94,7 @@ def at_zero(p, v, radii, a, dt):
     """The positions scaled about each cluster's centre so that its tightest pair has h = 0."""
     E, k = p.shape[:2]
     I, J = np.triu_indices(k, 1)
-    L = bb.stopping_reach(np.linalg.norm(v, axis=-1), a, dt)
+    L = stopping.stopping_reach(np.linalg.norm(v, axis=-1), a, dt)
     centre = p.mean(axis=1, keepdims=True)
     q = p - centre
     need = (radii[:, I] + radii[:, J] + L[:, I] + L[:, J]) / np.linalg.norm(
@@ -194,7 +197,7 @@ def test_culled_filter_equals_all_pairs(barrier):
         res = flt.filter(p, u, theta, velocities=v, radii=radii, u_max=a)
         if step % 6 == 0:
             w = flt.pair_weights(theta, None, Ia, Ja)
-            boxes = bb.AgentBoxes(radii, -np.c_[a, a], np.c_[a, a])
+            boxes = stopping.AgentBoxes(radii, -np.c_[a, a], np.c_[a, a])
             rows, _ = rows_of(p, v, w, Ia, Ja, flt.config.gamma, dt, boxes, cull=False)
             ua, fa = solvers.solve(
                 "exact", u, rows.flat_A, rows.flat_b, rows.offsets, -np.c_[a, a], np.c_[a, a]
@@ -257,7 +260,7 @@ def test_a_double_integrator_brakes_before_a_wall_from_any_speed_it_can_stop(sca
     ang = rng.uniform(-1.3, 1.3, n)
     heading = np.c_[np.cos(ang), np.sin(ang)]
     speed = rng.uniform(0.2, 1.0, n) * 20.0 * scale
-    x0 = -(0.2 * scale + radii + bb.stopping_reach(speed, a, dt))  # h = 0 against the wall
+    x0 = -(0.2 * scale + radii + stopping.stopping_reach(speed, a, dt))  # h = 0 against the wall
     p = np.c_[x0, np.arange(n) * 1000.0 * scale]  # beyond each other's stopping reaches
     v = heading * speed[:, None]
     flt = SafetyFilter(config(dt, 1.0, scale))
@@ -284,9 +287,9 @@ def test_continuous_time_rows_admit_the_backup():
         for e in range(200):
             I, J = np.triu_indices(k, 1)
             w = np.c_[np.full(len(I), 0.3), np.full(len(I), 0.7)]
-            boxes = bb.AgentBoxes(radii[e], -np.c_[a[e], a[e]], np.c_[a[e], a[e]])
+            boxes = stopping.AgentBoxes(radii[e], -np.c_[a[e], a[e]], np.c_[a[e], a[e]])
             rows, _ = bb.backup_rows(p[e], v[e], w, I, J, 2.0, None, boxes)
-            beta = bb.backup_action(v[e], a[e], None)
+            beta = stopping.backup_action(v[e], a[e], None)
             lhs = (rows.flat_A * beta[rows.owner]).sum(-1)
             assert (lhs <= rows.flat_b + 1e-12 * (1 + np.abs(rows.flat_b))).all()
 
@@ -349,7 +352,7 @@ def test_outside_the_safe_set_culling_is_exact_on_feasible_agents(dt, seed):
     )
     Ia, Ja = pairs.all_pairs(n)
     lo, hi = -np.c_[a, a], np.c_[a, a]
-    boxes = bb.AgentBoxes(radii, lo, hi)
+    boxes = stopping.AgentBoxes(radii, lo, hi)
     infeasible = 0
     for _ in range(3):
         u = np.clip(2.0 * (goals - p) - v, lo, hi)

@@ -9,8 +9,8 @@ from backup_states import pair_h
 from test_backup_barrier import config
 
 import rsvo_env
-from rsvo_env.dynamics import backup_barrier as bb
 from rsvo_env.dynamics import double_integrator_step
+from rsvo_env.dynamics.barriers import stopping
 from rsvo_env.filter.safety import SafetyFilter
 
 
@@ -24,7 +24,7 @@ def test_head_on_pairs_at_h_zero_stay_feasible_at_any_speed(speed_over_c_dt, dt,
     s = speed_over_c_dt * c * dt
     v = np.array([[s[0], 0.0], [-s[1], 0.0]])
     radii = np.array([0.5, 0.7])
-    L = bb.stopping_reach(s, c, dt)
+    L = stopping.stopping_reach(s, c, dt)
     gap = radii.sum() + L.sum()
     p = np.array([[-0.5 * gap, 0.0], [0.5 * gap, 0.0]])
     flt = SafetyFilter(config(dt, gamma_dt))

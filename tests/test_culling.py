@@ -7,10 +7,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env.dynamics import barriers
+from rsvo_env.dynamics import single_integrator
+from rsvo_env.dynamics.barriers import pair_rows
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
 from rsvo_env.qp import exact
+from rsvo_env.responsibility.svo import pair_omega
 from rsvo_env.scenarios import Crowd
 from rsvo_env.util import grid
 
@@ -30,7 +32,9 @@ def all_pairs_actions(flt, x, nominal, theta):
     cfg = flt.config
     I, J = pairs.all_pairs(len(x))
     w = flt.pair_weights(theta, None, I, J)
-    rows = barriers.single_integrator_rows(x, w, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi)
+    rows = single_integrator.single_integrator_rows(
+        x, w, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi
+    )
     return exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)[0]
 
 
@@ -81,7 +85,7 @@ def pairs_that_can_bind(theta, x):
     I, J = pairs.all_pairs(len(x))
     d = x[I] - x[J]
     h = (d**2).sum(axis=1) - 1.0
-    w = pairs.pair_omega(theta[I], theta[J])
+    w = pair_omega(theta[I], theta[J])
     return int((np.minimum(w, 1 - w) * 10.0 * h < 2 * 2.0 * np.abs(d).sum(axis=1)).sum())
 
 
@@ -142,13 +146,13 @@ def all_pairs_double_integrator(flt, x, v, nominal, theta):
     cfg = flt.config
     I, J = pairs.all_pairs(len(x))
     w = flt.pair_weights(theta, None, I, J)
-    rows = barriers.double_integrator_rows(
+    rows = pair_rows.double_integrator_rows(
         x,
         v,
         w,
         I,
         J,
-        barriers.BarrierSpec(
+        pair_rows.BarrierSpec(
             cfg.gamma,
             cfg.safety_radius,
             cfg.lo,
@@ -247,15 +251,17 @@ def test_culled_equals_all_pairs_in_any_units(seed, scale, kind, weighting):
     I, J = pairs.all_pairs(n)
     w = flt.pair_weights(theta, None, I, J)
     if v is None:
-        rows = barriers.single_integrator_rows(x, w, I, J, cfg.gamma, scale, cfg.lo, cfg.hi)
+        rows = single_integrator.single_integrator_rows(
+            x, w, I, J, cfg.gamma, scale, cfg.lo, cfg.hi
+        )
     else:
-        rows = barriers.double_integrator_rows(
+        rows = pair_rows.double_integrator_rows(
             x,
             v,
             w,
             I,
             J,
-            barriers.BarrierSpec(cfg.gamma, scale, cfg.lo, cfg.hi, cfg.barrier, dt=cfg.dt),
+            pair_rows.BarrierSpec(cfg.gamma, scale, cfg.lo, cfg.hi, cfg.barrier, dt=cfg.dt),
         )
     ref, feasible = exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)[:2]
     np.testing.assert_array_equal(res.feasible, feasible)

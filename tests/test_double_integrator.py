@@ -5,7 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env.dynamics import barriers, double_integrator_step
+from rsvo_env.dynamics import double_integrator_step
+from rsvo_env.dynamics.barriers import pair_rows
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
 A_MAX, DS = 5.0, 5.0
@@ -58,8 +59,8 @@ def test_split_shares_sum_to_rhs(seed, split, barrier, ti, tj):
     gamma = float(rng.uniform(0.2, 5.0))
     I, J = np.array([0]), np.array([1])
     w = SafetyFilter(FilterConfig()).pair_weights(np.array([ti, tj]), None, I, J)
-    rows = barriers.double_integrator_rows(
-        p, v, w, I, J, barriers.BarrierSpec(gamma, DS, LO, HI, barrier, split), cull=False
+    rows = pair_rows.double_integrator_rows(
+        p, v, w, I, J, pair_rows.BarrierSpec(gamma, DS, LO, HI, barrier, split), cull=False
     )
     rhs, exists = rhs_reference(p, v, barrier, gamma)
     if not exists:

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from test_culling import all_pairs_actions, crowd, moving
 
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
-from rsvo_env.geometry import pairs
+from rsvo_env.responsibility import pair_weights
 from rsvo_env.responsibility.svo import weight_matrix
 from rsvo_env.util import sizes
 
@@ -25,7 +25,7 @@ def test_every_floor_lies_below_the_weights_it_stands_for(seed, n, spread, zeros
     rng = np.random.default_rng(seed)
     theta = 10.0 ** rng.uniform(-spread / 2, spread / 2, (2, n))
     theta[rng.random((2, n)) < zeros] = 0.0
-    floor, group, required = pairs.theta_floor(theta, "asymmetric")
+    floor, group, required = pair_weights.theta_floor(theta, "asymmetric")
     listed = {tuple(p) for p in required.tolist()}
     for e in range(2):
         W = weight_matrix(theta[e])  # the weights the filter uses, by the matrix's convention
@@ -68,8 +68,8 @@ def footprint(theta, x, monkeypatch):
     def no_matrix(*args, **kwargs):
         raise AssertionError("an (N, N) weight matrix was built")
 
-    monkeypatch.setattr(pairs, "weight_matrix", no_matrix)
-    monkeypatch.setattr(pairs, "weight_floor", no_matrix)
+    monkeypatch.setattr(pair_weights, "weight_matrix", no_matrix)
+    monkeypatch.setattr(pair_weights, "weight_floor", no_matrix)
     flt = SafetyFilter(FilterConfig(gamma=10.0, safety_radius=1.0, u_max=2.0, dt=0.01))
     res = flt.filter(x, moving(len(x), 0), theta)
     rows = res.rows
@@ -86,7 +86,7 @@ def footprint(theta, x, monkeypatch):
             rows.flat_capped,
         )
     )
-    floor = pairs.floor_of(theta[None], "asymmetric")
+    floor = pair_weights.floor_of(theta[None], "asymmetric")
     floor_bytes = sum(a.nbytes for a in floor)
     return rows.n_pairs, row_bytes + floor_bytes, res
 

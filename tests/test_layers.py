@@ -159,32 +159,84 @@ def test_at_most_eight_modules_over_30_lines_at_the_top():
     assert len(big) <= 8, big
 
 
-def outside_dynamics() -> list[Path]:
-    return [p for p in PACKAGE.rglob("*.py") if "dynamics" not in p.relative_to(PACKAGE).parts]
+def outside(*folders: str) -> list[Path]:
+    """The package's modules outside the folder ``folders`` names (a path under the package)."""
+    return [
+        p for p in PACKAGE.rglob("*.py") if p.relative_to(PACKAGE).parts[: len(folders)] != folders
+    ]
 
 
-def test_no_branch_on_a_model_or_a_barrier_outside_dynamics():
-    """Nothing outside dynamics/ (where the barrier registry lives too) compares a model's or a
-    barrier's name or asks whether a model has headings: it asks the model."""
+def name_comparisons(source: str, names: set[str]) -> list[str]:
+    """Every comparison in ``source`` with a string constant among ``names`` (``x == "a"``,
+    ``x in ("a", "b")``, ``"a" != x``), as ``line: code``."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Compare):
+            constants = [
+                c.value
+                for operand in [node.left, *node.comparators]
+                for c in ast.walk(operand)
+                if isinstance(c, ast.Constant) and isinstance(c.value, str)
+            ]
+            if names & set(constants):
+                found.append(f"{node.lineno}: {ast.unparse(node)}")
+    return found
+
+
+def test_the_name_comparison_finder_finds_every_form():
+    source = 'a = x == "b"\nif "b" != y: pass\nz = w in ("c", "b")\nq = x == "other"\n'
+    assert [f.split(":")[0] for f in name_comparisons(source, {"b"})] == ["1", "2", "3"]
+
+
+def test_no_branch_on_a_model_outside_dynamics():
+    """Nothing outside dynamics/ compares a model's name or asks whether a model has headings:
+    it asks the model."""
     from rsvo_env.dynamics import MODELS
+
+    offenders = []
+    for path in outside("dynamics"):
+        source = path.read_text()
+        offenders += [f"{path.name}:{f}" for f in name_comparisons(source, set(MODELS))]
+        if "needs_headings" in source:
+            offenders.append(f"{path.name} needs_headings")
+    assert not offenders, offenders
+
+
+def test_no_branch_on_a_barrier_outside_the_barrier_modules():
+    """Nothing outside dynamics/barriers/ compares a barrier's name: the model and the filter
+    ask the barrier the registry gives (``barriers.get``)."""
     from rsvo_env.dynamics.barriers import BARRIERS
 
-    names = set(MODELS) | set(BARRIERS)
-    offenders = []
-    for path in outside_dynamics():
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.Attribute) and node.attr == "needs_headings":
-                offenders.append(f"{path.name}:{node.lineno} needs_headings")
-            if isinstance(node, ast.Compare):
-                constants = [
-                    c.value
-                    for operand in [node.left, *node.comparators]
-                    for c in ast.walk(operand)
-                    if isinstance(c, ast.Constant) and isinstance(c.value, str)
-                ]
-                if names & set(constants):
-                    offenders.append(f"{path.name}:{node.lineno} {ast.unparse(node)}")
+    offenders = [
+        f"{path.relative_to(PACKAGE)}:{f}"
+        for path in outside("dynamics", "barriers")
+        for f in name_comparisons(path.read_text(), set(BARRIERS))
+    ]
     assert not offenders, offenders
+
+
+def test_no_branch_on_a_controller_outside_control():
+    """Nothing outside control/ compares a controller's name: the scenario asks the controller
+    the registry gives (``control.get``)."""
+    from rsvo_env.control import CONTROLLERS
+
+    offenders = [
+        f"{path.relative_to(PACKAGE)}:{f}"
+        for path in outside("control")
+        for f in name_comparisons(path.read_text(), set(CONTROLLERS))
+    ]
+    assert not offenders, offenders
+
+
+def test_control_holds_at_most_six_modules_and_the_scenario_base_no_controller_setting():
+    """R-ORCA is one subpackage; the scenario base neither names a controller's setting nor
+    imports a controller's modules, only the registry."""
+    from rsvo_env.control import settings
+
+    assert len(list((PACKAGE / "control").glob("*.py"))) <= 6
+    base = (PACKAGE / "scenarios" / "base.py").read_text()
+    assert settings() and not [key for key in settings() if key in base]
+    assert "rorca" not in base
 
 
 def parameter_counts() -> tuple[list[str], list[str]]:

@@ -11,11 +11,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env.dynamics import barriers
+from rsvo_env.dynamics import single_integrator
 from rsvo_env.filter import projection_disk
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
 from rsvo_env.qp import exact
+from rsvo_env.responsibility import pair_weights
 from rsvo_env.scenarios import Crowd
 from rsvo_env.util import grid, sizes
 
@@ -26,7 +27,7 @@ def every_row(flt, x, nominal, theta, cull=False):
     cfg = flt.config
     I, J = pairs.all_pairs(len(x))
     w = flt.pair_weights(theta, None, I, J)
-    rows = barriers.single_integrator_rows(
+    rows = single_integrator.single_integrator_rows(
         x, w, I, J, cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, cull=cull
     )
     return exact.solve_csr(nominal, rows.flat_A, rows.flat_b, rows.offsets, cfg.lo, cfg.hi)
@@ -148,7 +149,7 @@ def test_slow_and_receding_agents_examine_fewer_pairs_and_keep_fewer_rows():
     moving = flt.filter(x, inward, theta).rows
     I, J = pairs.all_pairs(n)
     d = np.linalg.norm(x[I] - x[J], axis=1)
-    floor = pairs.theta_floor(theta[None], "asymmetric")
+    floor = pair_weights.theta_floor(theta[None], "asymmetric")
     box_radii = pairs.agent_radii(floor[0], 10.0, np.full((1, n), 2 * 2**0.5), np.ones((1, n)))
     box_pairs = len(grid.pairs_within_radii(x[None], box_radii, floor[1])[0])
     assert rest.n_pairs <= int((d <= 1.0 + 1e-6).sum()) + 1

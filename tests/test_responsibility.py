@@ -127,9 +127,10 @@ def test_equal_scores_give_one_half_at_any_magnitude(t):
     st.floats(0.0, 0.5),  # share of theta = 0 agents
 )
 def test_pair_weights_from_scores_are_the_weight_matrix_entries(seed, n, scale, zeros):
-    """The compiled pair weights (``pairs.scored_pairs``, the filter's large-N path) are the
+    """The compiled pair weights (``pair_weights.scored_pairs``, the filter's large-N path) are the
     weight matrix's entries bit for bit, in every env's weighting, at any scale of scores."""
     from rsvo_env.geometry import pairs
+    from rsvo_env.responsibility import pair_weights
 
     rng = np.random.default_rng(seed)
     theta = rng.uniform(0.0, 1.0, (3, n)) * 10.0**scale
@@ -138,9 +139,9 @@ def test_pair_weights_from_scores_are_the_weight_matrix_entries(seed, n, scale, 
     theta[2, :2] = 1.5e308, 1.7e308  # a sum that overflows
     I, J = pairs.all_pairs(n, 3)
     modes = ["asymmetric", "symmetric", "asymmetric"]
-    got = pairs.weights_of(theta, modes, I, J)
+    got = pair_weights.weights_of(theta, modes, I, J)
     W = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
-    np.testing.assert_array_equal(got, pairs.omega_pairs(W.reshape(3 * n, n), I, J, n))
+    np.testing.assert_array_equal(got, pair_weights.omega_pairs(W.reshape(3 * n, n), I, J, n))
     # and the numbers of Def. 1 as numpy computes them, an independent route
     from rsvo_env.responsibility.svo import scored_weight
 

@@ -1,6 +1,6 @@
-"""R-ORCA, the active scripted controller (``rsvo_env/control/rorca.py``, ``docs/liveness.md``): its
-half-planes are ORCA's with the R-SVO shares (reciprocal: any pair of velocities in both leaves
-no collision within the horizon), the egoist does less of the avoidance, and behind the
+"""R-ORCA, the active scripted controller (``rsvo_env.control.rorca``, ``docs/liveness.md``):
+its half-planes are ORCA's with the R-SVO shares (reciprocal: any pair of velocities in both
+leaves no collision within the horizon), the egoist does less of the avoidance, and behind the
 unchanged filter crowds finish with no collision."""
 
 import numpy as np
@@ -11,9 +11,10 @@ from hypothesis import strategies as st
 
 import rsvo_env
 from rsvo_env.control import rorca
+from rsvo_env.control.rorca.controller import UNROUTED
+from rsvo_env.control.rorca.velocities import half_planes
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.scenarios import paired_theta
-from rsvo_env.scenarios.crowd import UNROUTED
 from rsvo_env.util.planar import clip_norm
 
 coords = st.floats(-10, 10)
@@ -22,7 +23,7 @@ coords = st.floats(-10, 10)
 def rows_of(x, v, radii, share, tau=2.0, dt=0.05, parked=(False, False), seen=None):
     I, J = np.array([0]), np.array([1])
     seen = v if seen is None else seen
-    return rorca._half_planes(x, v, radii, I, J, share, tau, dt, np.array(parked), seen)
+    return half_planes(x, v, radii, I, J, share, tau, dt, np.array(parked), seen)
 
 
 @settings(deadline=None)  # the first example compiles the kernel
@@ -239,7 +240,7 @@ def test_move_to_goal_is_kept_by_name_and_the_ramp_merge_keeps_its_lane_follower
     s = base.sim.state
     mtg = base.sim.scenario.move_to_goal(s, True, base.sim.scenario.u_max)
     assert np.array_equal(base.sim.nominal_controls(), mtg)
-    with pytest.raises(ValueError, match="ramp_merge.nominal = 'rorca'.*lane follower"):
+    with pytest.raises(ValueError, match=r"ramp_merge.nominal = 'rorca'.*'move_to_goal'"):
         rsvo_env.parallel_env("ramp_merge", nominal="rorca")
     with pytest.raises(ValueError, match="crowd.nominal = 'orca'"):
         rsvo_env.parallel_env("crowd", nominal="orca")
@@ -328,22 +329,23 @@ def test_paired_theta_names_a_bad_count(bad):
 def reference_velocities(x, v, pref, radii, theta, u_max, dt, tau, parked, goals, held, K,
                          reach=rorca.GOAL_REACH):  # fmt: skip
     """R-ORCA assembled from its parts as it was before it became one compiled stage: every
-    pair's half-planes (``_half_planes``), ORCA's nearest-K rule by a lexsort, the disk's solve
+    pair's half-planes (``half_planes``), ORCA's nearest-K rule by a lexsort, the disk's solve
     agent by agent, the sidestep re-solve, the speed clip. One env (N agents);
     ``parked`` before the rule for agents whose goals are blocked."""
     from rsvo_env.geometry import pairs
     from rsvo_env.qp import disk
+    from rsvo_env.responsibility import pair_weights
 
     n = len(x)
     # an agent held short of a goal within the goal rule's reach counts as parked
     parked = parked | (held & (np.hypot(*(goals - x).T) <= reach * radii))
     I, J = pairs.candidate_pairs(x[None], 10.0 * float(radii.max()))
-    w = pairs.weights_of(theta[None], ["asymmetric"], I, J)
+    w = pair_weights.weights_of(theta[None], ["asymmetric"], I, J)
     s = 1.0 - w[:, 0]
     s = np.where(parked[I] & ~parked[J], 1.0, np.where(parked[J] & ~parked[I], 0.0, s))
     share = np.stack([s, 1.0 - s], axis=1)
     pref = rorca.arrival_capped(pref, x, goals, radii, tau, I, J, held)
-    A, b = rorca._half_planes(x, v, radii, I, J, share, tau, dt, parked, pref)
+    A, b = half_planes(x, v, radii, I, J, share, tau, dt, parked, pref)
     owner = np.concatenate([I, J])
     d2 = ((x[I] - x[J]) ** 2).sum(axis=-1)
     by = np.lexsort((np.concatenate([d2, d2]), owner))

@@ -1,7 +1,7 @@
 """R-ORCA's stage for envs of at most sizes.ALL_PAIRS_MAX_AGENTS agents
-(``rsvo_env/control/rorca_dense.py``): each agent reads the others of its env in place and its
+(``rsvo_env/control/rorca/dense.py``): each agent reads the others of its env in place and its
 weights from the env's matrix, and the velocities are bit for bit those of the grid stage
-(``rsvo_env/control/rorca_grid.py``, the one for larger envs) run on the same envs; the
+(``rsvo_env/control/rorca/grid.py``, the one for larger envs) run on the same envs; the
 simulation core hands it its own matrices, kept current."""
 
 import numpy as np
@@ -9,13 +9,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env.control import rorca, rorca_dense, rorca_grid
+from rsvo_env.control import rorca
+from rsvo_env.control.rorca import grid as rorca_grid
 from rsvo_env.envs.vector import BatchedEnv
+from rsvo_env.responsibility import pair_weights
 from rsvo_env.responsibility.svo import symmetric_envs, weight_matrix
 
 
 def grid_stage(x, v, pref, radii, theta, modes, K, parked, goals, held, u_max=2.0, dt=0.05):
-    """The grid stage (``rsvo_env/control/rorca_grid.py``, envs beyond 64 agents) on envs of
+    """The grid stage (``rsvo_env/control/rorca/grid.py``, envs beyond 64 agents) on envs of
     any size, with the rules and the cut rorca_velocities gives it, its weights from the
     scores (1/2 in the symmetric envs) or the matrices where a weighting is a callable."""
     E, n = x.shape[:2]
@@ -23,7 +25,7 @@ def grid_stage(x, v, pref, radii, theta, modes, K, parked, goals, held, u_max=2.
     f = lambda a: np.ascontiguousarray(a, dtype=np.float64).reshape(M, -1)  # noqa: E731
     xf, vf, pf, gf = f(x), f(v), f(pref), f(goals)
     r = f(np.broadcast_to(radii, (E, n))).reshape(M)
-    omega = rorca_dense.matrices(theta, modes) if any(map(callable, modes)) else None
+    omega = pair_weights.weight_matrices(theta, modes) if any(map(callable, modes)) else None
     rules = (parked.reshape(M), held.reshape(M), True, rorca.GOAL_REACH, held.reshape(M))
     out = rorca_grid.stage(
         n,
@@ -64,7 +66,7 @@ def test_the_dense_stage_equals_the_grid_stage_bit_for_bit(n, E, seed, K, lattic
     expected = grid_stage(x, v, pref, radii, theta, modes, K, parked, goals, held)
     args = (x, v, pref, radii, theta, modes, 2.0, 0.05, 2.0)
     K = None if K < 0 else K
-    W = rorca_dense.matrices(theta, modes)
+    W = pair_weights.weight_matrices(theta, modes)
     computed, given_matrices = (
         rorca.rorca_velocities(*args, max_neighbors=K, rules=rorca.Rules(parked, goals, held, m))
         for m in (None, W)
@@ -87,7 +89,7 @@ def test_beyond_64_agents_the_matrices_given_are_gathered_into_the_same_weights(
     args = (x, v, pref, 0.5, theta, modes, 2.0, 0.05)
     computed, given_matrices = (
         rorca.rorca_velocities(*args, rules=rorca.Rules(parked, goals, held, m))
-        for m in (None, rorca_dense.matrices(theta, modes))
+        for m in (None, pair_weights.weight_matrices(theta, modes))
     )
     assert np.array_equal(computed, given_matrices)
 
@@ -126,7 +128,7 @@ def test_within_decides_the_cut_as_the_square_root_does(cut, scale, ulps):
     """``rorca_agent.within``: ``d2 <= within(cut)`` is ``sqrt(d2) <= cut`` exactly (the stages
     test the cut without a square root), at the threshold and a few ulps either side of
     ``cut^2``, in any units."""
-    from rsvo_env.control.rorca_agent import within
+    from rsvo_env.control.rorca.agent import within
 
     T = within(cut)
     d2s = [scale * cut * cut, cut * cut, T]

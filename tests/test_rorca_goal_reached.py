@@ -1,5 +1,5 @@
 """R-ORCA's goal rule in the crowd: an agent that has reached its goal yields as parked within
-the rule's reach (``rorca_goal_reached``, ``rsvo_env.control.scripted_rorca``)."""
+the rule's reach (``rorca_goal_reached``, ``rsvo_env.control.rorca.scripted``)."""
 
 import numpy as np
 

@@ -1,4 +1,4 @@
-"""R-ORCA's grid stage (``rsvo_env/control/rorca_grid.py``, envs beyond 64 agents) against the
+"""R-ORCA's grid stage (``rsvo_env/control/rorca/grid.py``, envs beyond 64 agents) against the
 pair-by-pair assembly of ``test_rorca`` on crowds its cells find hard."""
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""R-ORCA's jam routing (``rsvo_env/control/rorca_route.py``) against a brute-force reading of
+"""R-ORCA's jam routing (``rsvo_env/control/rorca/route.py``) against a brute-force reading of
 its rule, in any unit; the goal rule on its own clock (``Rules.goal_held``); the right-hand
 rule's hold (``rh_hold``)."""
 
@@ -8,8 +8,9 @@ from crowd_runs import run_to_goals
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env.control import rorca, rorca_route
-from rsvo_env.control.rorca_route import (
+from rsvo_env.control import rorca
+from rsvo_env.control.rorca import route as rorca_route
+from rsvo_env.control.rorca.route import (
     CROWDED,
     LOOK,
     PROBE,

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rsvo_env.dynamics import barriers
+from rsvo_env.dynamics import single_integrator
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
 
@@ -73,7 +73,9 @@ def test_culling_changes_no_solution(n, seed):
     res = SafetyFilter(cfg).filter(x, nominal, theta)
     I, J = pairs.candidate_pairs(x[None])
     w = SafetyFilter(cfg).pair_weights(theta, None, I, J)
-    full = barriers.single_integrator_rows(x, w, I, J, 10.0, 1.0, cfg.lo, cfg.hi, cull=False)
+    full = single_integrator.single_integrator_rows(
+        x, w, I, J, 10.0, 1.0, cfg.lo, cfg.hi, cull=False
+    )
     from rsvo_env.qp import exact
 
     u_full, feasible, _, _ = exact.solve_batch(nominal, full.A, full.b, full.mask, cfg.lo, cfg.hi)
@@ -92,7 +94,7 @@ def test_kdtree_pairs_match_dense_pairs():
     res = flt.filter(x, nominal, theta)
     I, J = np.triu_indices(n, 1)
     w = flt.pair_weights(theta, None, I, J)
-    dense = barriers.single_integrator_rows(x, w, I, J, 10.0, 1.0, cfg.lo, cfg.hi)
+    dense = single_integrator.single_integrator_rows(x, w, I, J, 10.0, 1.0, cfg.lo, cfg.hi)
     from rsvo_env.qp import exact
 
     u_dense = exact.solve_batch(nominal, dense.A, dense.b, dense.mask, cfg.lo, cfg.hi)[0]

@@ -7,7 +7,8 @@ import pytest
 
 import rsvo_env
 from rsvo_env.control.nominal import move_to_goal
-from rsvo_env.dynamics import barriers, double_integrator_step
+from rsvo_env.dynamics import double_integrator_step
+from rsvo_env.dynamics.barriers import pair_rows
 from rsvo_env.envs.rendering import TRAIL
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
@@ -101,13 +102,13 @@ def test_double_integrator_crowd_flags_every_infeasible_step():
     for _ in range(60):
         nominal = np.clip(2.0 * (move_to_goal(p, goals, 2.0, 2.0) - v), -a_max, a_max)
         res = flt.filter(p, nominal, theta, velocities=v)
-        rows = barriers.double_integrator_rows(
+        rows = pair_rows.double_integrator_rows(
             p,
             v,
             w,
             I,
             J,
-            barriers.BarrierSpec(cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, dt=dt),
+            pair_rows.BarrierSpec(cfg.gamma, cfg.safety_radius, cfg.lo, cfg.hi, dt=dt),
             cull=False,
         )
         ref, feasible = exact.solve_batch(nominal, rows.A, rows.b, rows.mask, cfg.lo, cfg.hi)[:2]

@@ -12,9 +12,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from segment_states import at_zero, ends, obstacle_cluster, seg_obstacle_h, seg_pair_h
 
-from rsvo_env.dynamics import backup_barrier as bb
 from rsvo_env.dynamics import double_integrator_step
-from rsvo_env.dynamics import segment_barrier as sb
+from rsvo_env.dynamics.barriers import box, stopping
+from rsvo_env.dynamics.barriers import segment as sb
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.geometry.segments import separation
@@ -55,21 +55,21 @@ def test_rows_keep_the_segment_above_its_bound(s, angle, normal, c, dt, h, x, y,
     bind)."""
     v = np.array([[np.cos(angle), np.sin(angle)]]) * s * scale
     box = np.array([[c, c]]) * scale
-    L = bb.stopping_reach(np.array([s * scale]), box[:, 0], dt)[0]
+    L = stopping.stopping_reach(np.array([s * scale]), box[:, 0], dt)[0]
     p = np.zeros((1, 2))
     other = -np.array([[np.cos(normal), np.sin(normal)]]) * (L + 3.0 * scale)
     P, V = np.r_[p, other], np.r_[v, np.zeros((1, 2))]
     p0, p1 = ends(P, V, np.r_[box[:, 0], box[:, 0]], dt)
     dist = separation(p0[[0]] - other, p1[[0]] - other, 0 * other, 0 * other, p0[[0]] - other)[1][0]
     radii = np.array([0.5 * scale, dist - 0.5 * scale - h * c * scale * dt * dt])
-    boxes = sb.AgentBoxes(radii, -np.r_[box, box], np.r_[box, box])
+    boxes = stopping.AgentBoxes(radii, -np.r_[box, box], np.r_[box, box])
     rows, _ = sb.segment_rows(
         P, V, np.array([[0.4, 0.6]]), np.array([0]), np.array([1]), 0.5 / dt, dt, boxes, cull=False
     )
     mine = rows.owner == 0
     A, b = rows.flat_A[mine], rows.flat_b[mine]
     n = -A[0] / (0.5 * dt * dt)
-    beta = bb.backup_action(v, box[:, 0], dt)
+    beta = stopping.backup_action(v, box[:, 0], dt)
     tol = 1e-12 * scale * (1.0 + s * dt + c * dt * dt + L)
     assert (A @ beta[0] <= b + tol * (1 + np.abs(A).sum(-1))).all()
     # the farthest point toward a corner of the box that meets every row, on the way from beta
@@ -202,9 +202,9 @@ def test_continuous_time_rows_admit_the_backup():
         I, J = np.triu_indices(k, 1)
         w = np.c_[np.full(len(I), 0.3), np.full(len(I), 0.7)]
         for e in range(200):
-            boxes = sb.AgentBoxes(radii[e], -np.c_[a[e], a[e]], np.c_[a[e], a[e]])
+            boxes = stopping.AgentBoxes(radii[e], -np.c_[a[e], a[e]], np.c_[a[e], a[e]])
             rows, _ = sb.segment_rows(p[e], v[e], w, I, J, 2.0, None, boxes)
-            beta = bb.backup_action(v[e], a[e], None)
+            beta = stopping.backup_action(v[e], a[e], None)
             lhs = (rows.flat_A * beta[rows.owner]).sum(-1)
             assert (lhs <= rows.flat_b + 1e-12 * (1 + np.abs(rows.flat_b))).all()
 
@@ -284,7 +284,7 @@ def test_obstacles_up_to_1e7_in_size_and_position_keep_the_qp_feasible(kind, siz
             dynamics="double_integrator", u_max=1.0, safety_radius=2 * r, dt=dt, gamma=10.0
         )
     )
-    c = bb.braking_capability(np.array([[-1.0, -1.0]]), np.array([[1.0, 1.0]]))[0]
+    c = box.braking_capability(np.array([[-1.0, -1.0]]), np.array([[1.0, 1.0]]))[0]
     rounding = 1e-15 * (size + where)
     for _ in range(40):
         p, v, obstacles = at_a_big_obstacle(rng, kind, size, where, r, c, dt)

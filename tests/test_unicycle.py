@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import rsvo_env
-from rsvo_env.dynamics import barriers, unicycle_step
+from rsvo_env.dynamics import single_integrator, unicycle_step
 from rsvo_env.dynamics.unicycle import heading_vectors, rotate_rows
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.geometry import pairs
@@ -184,7 +184,7 @@ def every_row(flt, p, th, nom, theta, radii, holo):
         bodies = bodies.with_holonomic(holo, cfg.u_max, cfg.lookahead)
     q, nom_b, row_bodies, rotation = cfg.model.lift(cfg, p[None], nom[None], bodies, th[None])
     I, J = pairs.all_pairs(n)
-    rows = barriers.single_integrator_rows(
+    rows = single_integrator.single_integrator_rows(
         q[0],
         flt.pair_weights(theta, None, I, J),
         I,

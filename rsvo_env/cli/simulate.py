@@ -16,9 +16,8 @@ from pathlib import Path
 from typing import Any
 
 import rsvo_env
-from rsvo_env import dynamics
+from rsvo_env import control, dynamics
 from rsvo_env.cli.episode import run
-from rsvo_env.scenarios.base import NOMINALS
 from rsvo_env.util.arguments import (
     HelpFormatter,
     Parser,
@@ -91,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument(
         "--nominal",
-        choices=NOMINALS,
+        choices=control.names(),
         help="the scripted controller (default: the scenario's own, see above)",
     )
     ap.add_argument("--theta", type=float, nargs="+", help="personality scores >= 0, one per agent")

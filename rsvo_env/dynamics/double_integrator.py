@@ -8,9 +8,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from rsvo_env.dynamics import barriers
+from rsvo_env.dynamics.barriers.split import SplitBarrier
 from rsvo_env.dynamics.model import Dynamics
 from rsvo_env.util.planar import clip_each, norm
-from rsvo_env.util.validation import shown
 
 if TYPE_CHECKING:
     from rsvo_env.qp.rows import Rows
@@ -24,49 +25,16 @@ def double_integrator_step(
     return p + dt * v + (0.5 * dt * dt) * a, v + dt * a
 
 
-def check_sampled_pairs(dt: float, bodies: Any, I: NDArray, J: NDArray) -> None:
-    """The sampled-data bound of the braking barrier for each pair of bodies of their own:
-    ``dt^2 (A / 2 + U) < r_i + r_j`` (``A = a_i + a_j``, ``U = (U_i + U_j) / 2``), the pair's
-    version of the config's ``dt^2 (a_max + |u_max|) < safety_radius``; an error names the pair."""
-    from rsvo_env.dynamics.barriers import braking_capability
-
-    a = braking_capability(bodies.lo, bodies.hi)
-    reach = 0.5 * (a[I] + a[J] + bodies.speed[I] + bodies.speed[J])
-    Ds = bodies.radii[I] + bodies.radii[J]
-    bad = dt * dt * reach >= Ds
-    if bad.any():
-        k = int(np.argmax(bad))
-        raise ValueError(
-            f"agents {int(I[k])} and {int(J[k])}: dt^2 (A / 2 + U) = "
-            f"{shown(dt * dt * reach[k])} >= "
-            f"r_i + r_j = {shown(Ds[k])}: the sampled-data guarantee of the braking barrier needs "
-            "dt^2 (A / 2 + U) < r_i + r_j (docs/double_integrator.md)"
-        )
-
-
-# the barriers whose rows are met by every agent's backup at once (docs/double_integrator.md)
-BACKED = ("segment", "backup")
 # the scripted controller approaches its goal at the speed from which braking at this share of
 # the acceleration bound stops there: the rest of the bound is left to the filter and the lag
 BRAKE_SHARE = 0.5
 
 
-def _backed(barrier: str):
-    """The rows and culling radii of a barrier of ``BACKED``."""
-    if barrier == "segment":
-        from rsvo_env.dynamics.segment_barrier import segment_radii, segment_rows
-
-        return segment_rows, segment_radii
-    from rsvo_env.dynamics.backup_barrier import backup_radii, backup_rows
-
-    return backup_rows, backup_radii
-
-
 class DoubleIntegrator(Dynamics):
-    """The stopping-segment barrier's rows (``rsvo_env.dynamics.segment_barrier``, the default)
-    or the backup barrier's (``backup_barrier``, the stopping disk): with either every QP is
-    feasible while every h >= 0, walls included; or the braking or HOCBF barrier's, split by
-    responsibility (``FilterConfig.barrier``, ``split``)."""
+    """The rows of the barrier ``FilterConfig.barrier`` names (``rsvo_env.dynamics.barriers``):
+    the stopping segment's (the default) or the backup's (the stopping disk), with either of
+    which every QP is feasible while every h >= 0, walls included; or the braking or HOCBF
+    barrier's, split by responsibility (``split``)."""
 
     name = "double_integrator"
     limit_name = "a_max"
@@ -91,138 +59,25 @@ class DoubleIntegrator(Dynamics):
     def step(self, positions, velocities, u, dt):
         return double_integrator_step(positions, velocities, u, dt)
 
-    def takes_walls(self, barrier: str) -> bool:
-        # the braking barrier's proof covers circles only; the segment and backup barriers' any
-        # capsule
-        return barrier in BACKED
-
     def check_box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> None:
-        if cfg.barrier == "hocbf":
-            return
-        if not ((lo < 0).all() and (hi > 0).all()):
-            raise ValueError(
-                f"FilterConfig: the {cfg.barrier} barrier needs u_min < 0 < u_max, got "
-                f"u_min = {shown(lo.tolist())}, u_max = {shown(hi.tolist())}"
-            )
-        if cfg.barrier in BACKED:  # exact in sampled time at any dt
-            return
-        from rsvo_env.dynamics.barriers import braking_capability, largest_input
-
-        reach = float(braking_capability(lo, hi) + largest_input(lo, hi))
-        if cfg.dt is not None and cfg.dt**2 * reach >= cfg.safety_radius:
-            # the sampled-data row divides by the gap at the next sample, which h >= 0 keeps
-            # above safety_radius - dt^2 (a_max + |U|) (docs/double_integrator.md)
-            raise ValueError(
-                f"FilterConfig: dt^2 (a_max + |u_max|) = {shown(cfg.dt**2 * reach)} >= "
-                f"safety_radius = {shown(cfg.safety_radius)}: the sampled-data guarantee of the "
-                "braking barrier needs dt^2 (a_max + |u_max|) < safety_radius"
-            )
+        barriers.get(cfg.barrier).check_box(cfg, lo, hi)
 
     def filter_rows(self, cfg, positions, velocities, weights, I, J, bodies, capsules, n):
-        if cfg.barrier not in BACKED:
-            return super().filter_rows(
-                cfg, positions, velocities, weights, I, J, bodies, capsules, n
-            )
-        return _backed(cfg.barrier)[0](
-            positions, velocities, weights, I, J, cfg.gamma, cfg.dt, bodies, capsules, n
+        return barriers.get(cfg.barrier).filter_rows(
+            cfg, positions, velocities, weights, I, J, bodies, capsules, n
         )
 
     def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:
-        from rsvo_env.dynamics import barriers
-
-        if cfg.barrier in BACKED:
+        barrier = barriers.get(cfg.barrier)
+        if not isinstance(barrier, SplitBarrier):
             raise ValueError(
                 f"the {cfg.barrier} barrier's rows come with each agent's trust box: use "
                 "filter_rows"
             )
-
-        if bodies.uniform:
-            lo, hi, radii = cfg.lo, cfg.hi, None
-        else:
-            lo, hi, radii = bodies.lo, bodies.hi, bodies.radii
-            if cfg.dt is not None and cfg.barrier == "braking":
-                check_sampled_pairs(cfg.dt, bodies, I, J)
-        spec = barriers.BarrierSpec(
-            cfg.gamma, cfg.safety_radius, lo, hi, cfg.barrier, cfg.split, cfg.gamma2, cfg.dt
-        )
-        return barriers.double_integrator_rows(
-            positions, velocities, weights, I, J, spec, radii=radii
-        )
-
-    def obstacle_rows(self, cfg, positions, velocities, bodies, capsules, n):
-        from rsvo_env.dynamics.double_integrator_obstacles import double_integrator_obstacle_rows
-
-        walls = np.any(capsules[..., 0:2] != capsules[..., 2:4], axis=-1)
-        if walls.any():
-            raise ValueError(
-                f"walls are not available for the double_integrator with the {cfg.barrier} "
-                "barrier (circles are; the segment and backup barriers take walls): obstacle "
-                f"{int(np.nonzero(walls)[-1][0])} is a segment"
-            )
-        if cfg.dt is not None and cfg.barrier == "braking":
-            from rsvo_env.dynamics.barriers import braking_capability
-
-            # the worst agent (fastest box, smallest body) against the smallest circle
-            reach = float((braking_capability(bodies.lo, bodies.hi) + bodies.speed).max())
-            Ds = float(bodies.radii.min()) + float(capsules[..., 4].min())
-            if cfg.dt**2 * reach >= Ds:
-                raise ValueError(
-                    f"an obstacle's safe distance r + rho = {shown(Ds)} <= dt^2 (a_max + "
-                    f"|u_max|) = "
-                    f"{shown(cfg.dt**2 * reach)}: the sampled-data guarantee needs it larger"
-                )
-        return double_integrator_obstacle_rows(cfg, positions, velocities, bodies, capsules, n)
+        return barrier.pair_rows(cfg, positions, velocities, weights, I, J, bodies)
 
     def culling_radii(self, cfg, omega_floor, velocities, bodies, speed=None):
-        from rsvo_env.dynamics.double_integrator_radii import WorstPair, double_integrator_radii
-
-        if cfg.barrier in BACKED:
-            E, n = velocities.shape[:2]
-            return _backed(cfg.barrier)[1](
-                omega_floor,
-                velocities,
-                cfg.gamma,
-                cfg.dt,
-                bodies.radii.reshape(E, n),
-                bodies.lo.reshape(E, n, 2),
-                bodies.hi.reshape(E, n, 2),
-                bodies.speed.reshape(E, n),
-            )
-        if bodies.uniform:
-            return double_integrator_radii(
-                omega_floor,
-                velocities,
-                cfg.gamma,
-                cfg.safety_radius,
-                cfg.lo,
-                cfg.hi,
-                cfg.barrier,
-                cfg.gamma2,
-                cfg.dt,
-            )
-        # bodies and boxes of their own: the radius of the worst pair bounds every pair's
-        # (it grows with Ds and U and shrinks with A, docs/double_integrator.md)
-        from rsvo_env.dynamics.barriers import braking_capability
-
-        a = braking_capability(bodies.lo, bodies.hi)
-        worst = WorstPair(
-            A=2.0 * float(a.min()),
-            U=float(bodies.speed.max()),
-            Ds_min=2.0 * float(bodies.radii.min()),
-            a_top=float(a.max()),
-        )
-        return double_integrator_radii(
-            omega_floor,
-            velocities,
-            cfg.gamma,
-            2.0 * float(bodies.radii.max()),
-            cfg.lo,
-            cfg.hi,
-            cfg.barrier,
-            cfg.gamma2,
-            cfg.dt,
-            worst,
-        )
+        return barriers.get(cfg.barrier).culling_radii(cfg, omega_floor, velocities, bodies)
 
     def reach(self, params: dict[str, Any], limit: float, horizon: float) -> tuple[float, float]:
         v0 = float(params.get("v0", 0.0))

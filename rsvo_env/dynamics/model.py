@@ -88,11 +88,6 @@ class Dynamics:
         """The exact zero-order-hold step: (positions, velocities) after ``dt`` with ``u``."""
         raise NotImplementedError
 
-    def takes_walls(self, barrier: str) -> bool:
-        """Whether its obstacle rows under ``barrier`` cover walls (segments), not only
-        circles."""
-        return True
-
     def check_box(self, cfg: FilterSettings, lo: NDArray, hi: NDArray) -> None:
         """Refuse an input box under which this model's guarantee does not hold."""
 

@@ -1,18 +1,20 @@
-"""The single integrator (paper, Sec. III-B): ``x' = u``, the input a velocity."""
+"""The single integrator (paper, Sec. III-B): ``x' = u``, the input a velocity, and its
+barrier rows (paper, eq. ``qp``)."""
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env.dynamics.model import Dynamics
+from rsvo_env.qp.rows import PairFlags, Rows, finish
 from rsvo_env.util.planar import clip_each
 from rsvo_env.util.validation import shown
 
 if TYPE_CHECKING:
-    from rsvo_env.qp.rows import Rows
     from rsvo_env.util.settings import FilterSettings
 
 
@@ -21,6 +23,76 @@ def single_integrator_step(
 ) -> NDArray[np.float64]:
     """``x+ = x + dt u``."""
     return x + dt * u
+
+
+@njit(cache=True, inline="always")
+def single_integrator_row(xi0, xi1, xj0, xj1, w, gamma, R2):
+    """Agent i's row against j (paper, eq. ``qp``): ``A = -2 (x_i - x_j)``,
+    ``b = omega_ij gamma h_ij`` with ``h_ij = |x_i - x_j|^2 - R^2``. Returns (ax, ay, b, h)."""
+    dx = xi0 - xj0
+    dy = xi1 - xj1
+    h = (dx * dx + dy * dy) - R2
+    return -2.0 * dx, -2.0 * dy, w * gamma * h, h
+
+
+@njit(cache=True)
+def _single_integrator_pairs(x, I, J, w, gamma, radii):
+    """Per pair: ``A_i = -2 dx``, ``h = |dx|^2 - (r_i + r_j)^2``, ``b = omega gamma h`` for
+    both agents."""
+    P = I.shape[0]
+    A_i = np.empty((P, 2))
+    b_i = np.empty(P)
+    b_j = np.empty(P)
+    h = np.empty(P)
+    for p in range(P):
+        i, j = I[p], J[p]
+        R = radii[i] + radii[j]
+        ax, ay, b_i[p], h[p] = single_integrator_row(
+            x[i, 0], x[i, 1], x[j, 0], x[j, 1], w[p, 0], gamma, R * R
+        )
+        A_i[p, 0] = ax
+        A_i[p, 1] = ay
+        b_j[p] = w[p, 1] * gamma * h[p]
+    return A_i, b_i, b_j, h
+
+
+def single_integrator_rows(
+    positions: NDArray,
+    omega_pairs: NDArray,
+    I: NDArray,
+    J: NDArray,
+    gamma: float,
+    safety_radius: float | NDArray,
+    lo: NDArray,
+    hi: NDArray,
+    cull: bool = True,
+) -> Rows:
+    """Rows of the paper's QP (eq. ``qp``, Thm. 1) for the pairs (I, J).
+
+    ``omega_pairs`` (P, 2): column 0 is omega of agent ``I[p]`` against ``J[p]``, column 1 the
+    other way round; the two sum to 1, so the two rows sum to eq. ``centralized-cbf``.
+    ``safety_radius``: every pair's safe distance, or (n,) body radii (a pair's is
+    ``r_i + r_j``); ``lo``, ``hi``: one box (2,) or one per agent (n, 2).
+    """
+    n = positions.shape[0]
+    A_i, b_i, b_j, h = _single_integrator_pairs(
+        np.ascontiguousarray(positions, dtype=np.float64),
+        I,
+        J,
+        np.ascontiguousarray(omega_pairs, dtype=np.float64),
+        float(gamma),
+        body_radii(safety_radius, n),
+    )
+    none = np.zeros(len(I), dtype=bool)
+    return finish(n, I, J, A_i, b_i, b_j, h, lo, hi, PairFlags(~none, none, none), cull)
+
+
+def body_radii(safety_radius: float | NDArray, n: int) -> NDArray[np.float64]:
+    """(n,) body radii: the given ones, or half of one pair distance for every agent (exact:
+    ``R / 2 + R / 2 == R``, so identical agents keep the pair distance to the last bit)."""
+    if np.ndim(safety_radius) == 0:
+        return np.full(n, 0.5 * float(safety_radius))
+    return np.ascontiguousarray(safety_radius, dtype=np.float64)
 
 
 class SingleIntegrator(Dynamics):
@@ -51,9 +123,7 @@ class SingleIntegrator(Dynamics):
             )
 
     def rows(self, cfg, positions, velocities, weights, I, J, bodies) -> Rows:
-        from rsvo_env.dynamics import barriers
-
-        return barriers.single_integrator_rows(
+        return single_integrator_rows(
             positions, weights, I, J, cfg.gamma, bodies.radii, bodies.lo, bodies.hi
         )
 

@@ -102,6 +102,7 @@ class FilterConfig:
                 f"FilterConfig needs finite u_min < u_max per component, got "
                 f"u_min = {shown(lo.tolist())}, u_max = {shown(hi.tolist())}"
             )
+        barriers.get(self.barrier, "FilterConfig.barrier")
         model.check_box(self, lo, hi)
         lo, hi = model.box(self, lo, hi)
         object.__setattr__(self, "lo", lo)
@@ -110,10 +111,6 @@ class FilterConfig:
             raise ValueError(
                 f"FilterConfig.weighting = {shown(self.weighting)}; use one of {WEIGHTING_MODES} "
                 "or a callable theta -> omega matrix"
-            )
-        if self.barrier not in barriers.BARRIERS:
-            raise ValueError(
-                f"FilterConfig.barrier = {shown(self.barrier)}; use one of {barriers.BARRIERS}"
             )
         if self.split not in barriers.SPLITS:
             raise ValueError(

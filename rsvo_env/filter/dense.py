@@ -1,7 +1,7 @@
 """The dense single-integrator filter in one compiled pass, for scenes of few agents.
 
 For every agent of every env: its row against every other agent of the env (paper, eq. ``qp``,
-with ``barriers.single_integrator_row``), exact culling (``barriers.support`` over the box,
+with ``single_integrator.single_integrator_row``), exact culling (``rows.support`` over the box,
 ``projection_disk.disk_support`` over the disk the solution lies in), and the exact
 solve (``exact.solve_rows``). The same arithmetic, rows in the same order, as the general path
 (pairs, packing, batched solve), without its intermediate arrays: bit-identical results, tested.
@@ -13,9 +13,10 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
-from rsvo_env.dynamics.barriers import single_integrator_row, support
+from rsvo_env.dynamics.single_integrator import single_integrator_row
 from rsvo_env.filter.projection_disk import disk_support
 from rsvo_env.qp.exact import solve_rows
+from rsvo_env.qp.rows import support
 from rsvo_env.util import threads
 
 # Up to this many agents an env the compiled all-pairs pass serves (rsvo_env.util.sizes).

@@ -24,8 +24,8 @@ from numpy.typing import NDArray
 
 from rsvo_env.geometry import pairs
 from rsvo_env.geometry.bodies import Bodies
-from rsvo_env.geometry.pairs import Floor
 from rsvo_env.qp.rows import Rows, storage
+from rsvo_env.responsibility.pair_weights import Floor
 from rsvo_env.util import grid, sizes
 
 if TYPE_CHECKING:
@@ -184,7 +184,8 @@ def smallest_radius(radii, box_radii, exempt):
 @njit(cache=True)
 def too_close(x, I, J, radii):
     """(M,) whether each agent is in a pair (I, J) with ``h < 0``, computed as its row's
-    ``h`` is (``barriers.single_integrator_row``): every agent with a pair row ``b < 0``."""
+    ``h`` is (``single_integrator.single_integrator_row``): every agent with a pair row
+    ``b < 0``."""
     out = np.zeros(x.shape[0], dtype=np.bool_)
     for p in range(I.shape[0]):
         i, j = I[p], J[p]

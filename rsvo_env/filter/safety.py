@@ -31,6 +31,8 @@ from rsvo_env.geometry.bodies import Bodies
 from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.qp import solve as solvers
 from rsvo_env.qp.rows import Rows
+from rsvo_env.responsibility import pair_weights
+from rsvo_env.responsibility.pair_weights import Floor
 from rsvo_env.responsibility.svo import (
     Weighting,
     min_pair_weight,
@@ -46,11 +48,11 @@ from rsvo_env.util.validation import check_theta, check_vectors, real_array
 class Known(NamedTuple):
     """What a caller of :meth:`SafetyFilter.apply` already knows of its scenes: each scene's
     smallest weight ``omega_min`` (E,), each agent's nearest distance ``nearest`` (E, N), and
-    ``floor``, :func:`pairs.weight_floor` of the weights."""
+    ``floor``, :func:`pair_weights.weight_floor` of the weights."""
 
     omega_min: NDArray[np.float64] | None = None
     nearest: NDArray[np.float64] | None = None
-    floor: pairs.Floor | None = None
+    floor: Floor | None = None
 
 
 class SafetyFilter:
@@ -65,9 +67,9 @@ class SafetyFilter:
         self._kept: dict[str, tuple[NDArray, Any]] = {}
         self._default_bodies: dict[tuple[int, int], Bodies] = {}
         # the last culling radii: (floor, bodies, radii, reach), see _culling_radii
-        self._radii: tuple[pairs.Floor, Bodies, NDArray, NDArray] | None = None
+        self._radii: tuple[Floor, Bodies, NDArray, NDArray] | None = None
         # the last floor and its weights times gamma (the search by the nominal)
-        self._scaled_floor: tuple[pairs.Floor | None, NDArray | None] = (None, None)
+        self._scaled_floor: tuple[Floor | None, NDArray | None] = (None, None)
         # the agents the last search by the nominal found exempt (likely again: a jam holds)
         self._exempt = np.zeros(0, dtype=bool)
 
@@ -119,14 +121,14 @@ class SafetyFilter:
         mode = self.config.weighting
         n = theta.shape[-1]
         if omega is None and weighting is not None:
-            return pairs.weights_of(theta.reshape(-1, n), weighting, I, J)
+            return pair_weights.weights_of(theta.reshape(-1, n), weighting, I, J)
         if omega is None and callable(mode):
             omega = weight_matrix(theta, mode)
         if omega is not None:
-            return pairs.omega_pairs(np.ascontiguousarray(omega).reshape(-1, n), I, J, n)
+            return pair_weights.omega_pairs(np.ascontiguousarray(omega).reshape(-1, n), I, J, n)
         if mode == "symmetric":
             return np.full((len(I), 2), 0.5)
-        return pairs.scored_pairs(theta.reshape(-1, n), I, J)
+        return pair_weights.scored_pairs(theta.reshape(-1, n), I, J)
 
     def filter(
         self,
@@ -324,7 +326,7 @@ class SafetyFilter:
         )
 
     def _culling_radii(
-        self, floor: pairs.Floor, velocities: NDArray | None, bodies: Bodies
+        self, floor: Floor, velocities: NDArray | None, bodies: Bodies
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Each agent's search radius per score group (E, N, K) and each scene's smallest (E,).
         Radii that do not depend on the state (models without velocities) are kept for the
@@ -340,12 +342,12 @@ class SafetyFilter:
             self._radii = (floor, bodies, radii, reach)
         return radii, reach
 
-    def _floor(self, theta: NDArray, omega: NDArray | None) -> pairs.Floor:
-        """:func:`pairs.weight_floor` of the weights in force, from the scores alone (O(N)
+    def _floor(self, theta: NDArray, omega: NDArray | None) -> Floor:
+        """:func:`pair_weights.weight_floor` of the weights in force, from the scores alone (O(N)
         memory) for a named weighting."""
         if omega is not None:  # a caller's matrix, whatever the configured mode says
-            return pairs.weight_floor(omega)
-        return self._of_scores("floor", theta, pairs.floor_of)
+            return pair_weights.weight_floor(omega)
+        return self._of_scores("floor", theta, pair_weights.floor_of)
 
     def _matrix(self, theta: NDArray, weighting: Sequence[Weighting] | None) -> NDArray:
         """(E, N, N) weight matrices of ``theta`` (E, N): each env's named ``weighting``, or

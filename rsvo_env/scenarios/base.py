@@ -17,8 +17,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env import dynamics
-from rsvo_env.control import nominal, rorca, rorca_route, scripted_rorca, stall
+from rsvo_env import control, dynamics
+from rsvo_env.control import nominal, stall
 from rsvo_env.dynamics import Dynamics
 from rsvo_env.geometry.obstacles import Obstacles
 from rsvo_env.util.planar import within
@@ -39,28 +39,17 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "deadlock_resolution": "right_hand",
     # the right-hand rule turns only agents that have come no closer to their goals for this
     # long (s; the stall clock, rsvo_env.control.stall): 0, every agent it fires for; None, the
-    # controller's own: rorca_route.RH_HOLD where R-ORCA routes around knots, else 0
+    # controller's own (Controller.rh_hold)
     "rh_hold": None,
     "theta": None,
     "theta_max": 1000.0,
     # (low, high): each episode draws every agent's theta uniformly from it (env's generator)
     "theta_range": None,
-    # the scripted controller: "move_to_goal" (the paper's, Sec. V-A) or "rorca" (R-ORCA's
-    # active velocity toward it, rsvo_env.control.rorca), with its time horizon and body scale
+    # the scripted controller, a name in rsvo_env.control's registry (the paper's move-to-goal,
+    # Sec. V-A, by default); each controller's own settings join these defaults
     "nominal": "move_to_goal",
-    "rorca_tau": 2.0,
-    "rorca_pad": 1.05,
-    # R-ORCA's goal rule: an agent held this long (s) within this many of its (padded) radii
-    # of its goal yields as if parked; a reach of 0 turns the rule off
-    "rorca_goal_reach": rorca.GOAL_REACH,
-    "rorca_goal_hold": rorca.HOLD_SECONDS,
-    # ... and so does one within that reach of a goal it has reached (the crowd's; scripted_rorca)
-    "rorca_goal_reached": False,
-    # R-ORCA's preferred velocity turned around the knots ahead (rsvo_env.control.rorca_route)
-    "rorca_route": False,
 }
 DEADLOCK_RESOLUTIONS = ("right_hand", "none")
-NOMINALS = ("move_to_goal", "rorca")
 
 
 @njit(cache=True)
@@ -81,6 +70,8 @@ class Scenario:
     defaults: ClassVar[dict[str, Any]] = {}
     # the models a scene takes by ``dynamics=`` (none: only its own, ``dynamics``)
     models: ClassVar[tuple[str, ...]] = ()
+    # the scripted controllers a scene takes by ``nominal=`` (none: every registered one)
+    controllers: ClassVar[tuple[str, ...]] = ()
     # a scenario laid out for a fixed number of agents (None: any number >= 2)
     fixed_agents: ClassVar[int | None] = None
     # parameters that must be > 0 and >= 0 (each subclass adds its own)
@@ -89,8 +80,6 @@ class Scenario:
     nonnegative: ClassVar[tuple[str, ...]] = (
         "rh_trigger",
         "rh_trigger_factor",
-        "rorca_goal_reach",
-        "rorca_goal_hold",
         "rh_hold",
     )
 
@@ -124,9 +113,16 @@ class Scenario:
             if key in params:
                 params[key] = check_positive(params[key], f"{self.name}.{key}")
         stall.check_dt(params["dt"], f"{self.name}.dt")
-        if params["rh_hold"] is None:  # the controller's own: routing's last resort waits
-            routed = params["nominal"] == "rorca" and params["rorca_route"]
-            params["rh_hold"] = rorca_route.RH_HOLD if routed else 0.0
+        controller = control.get(params["nominal"], f"{self.name}.nominal")
+        if self.controllers and controller.name not in self.controllers:
+            raise ValueError(
+                f"{self.name}.nominal = {shown(controller.name)}: this scene's scripted "
+                f"controller is one of {self.controllers}"
+            )
+        self.controller = controller
+        self.controller_settings = controller.check(params, self.name)
+        if params["rh_hold"] is None:
+            params["rh_hold"] = controller.rh_hold(self.controller_settings)
         params["rh_hold"] = check_real(params["rh_hold"], f"{self.name}.rh_hold")
         for key in self.nonnegative:
             if key in params and params[key] < 0:
@@ -139,12 +135,6 @@ class Scenario:
                 f"{self.name}.deadlock_resolution = {shown(params['deadlock_resolution'])}; "
                 f"use one of {DEADLOCK_RESOLUTIONS}"
             )
-        if params["nominal"] not in NOMINALS:
-            raise ValueError(
-                f"{self.name}.nominal = {shown(params['nominal'])}; use one of {NOMINALS}"
-            )
-        for key in ("rorca_tau", "rorca_pad"):
-            params[key] = check_positive(params[key], f"{self.name}.{key}")
         check_count(params["max_steps"], f"{self.name}.max_steps", 1)
         if params["theta"] is not None:
             self.check_theta(params["theta"])
@@ -169,7 +159,8 @@ class Scenario:
         """Every parameter's default: the common ones, the model's (``dynamics`` names it where
         the scenario takes any model), the scenario's own."""
         own = {"dynamics": type(self).dynamics} if self.models else {}
-        return {**COMMON_DEFAULTS, **self.model.scenario_defaults, **self.defaults, **own}
+        common = {**COMMON_DEFAULTS, **control.settings()}
+        return {**common, **self.model.scenario_defaults, **self.defaults, **own}
 
     def check(self) -> None:
         """Checks that relate parameters of a scenario to one another (a subclass's own)."""
@@ -306,8 +297,8 @@ class Scenario:
 
     def nominal(self, state: Any, right_hand: bool = True) -> NDArray[np.float64]:
         """Scripted nominal controls (E, N, 2) in physical units: move-to-goal (paper, Sec. V-A)
-        plus the right-hand rule (unless ``right_hand`` is False), or R-ORCA's velocity toward
-        it (``nominal="rorca"``), as the model's inputs (:meth:`command`)."""
+        plus the right-hand rule (unless ``right_hand`` is False), or the velocity the scripted
+        controller (``nominal``) asks toward it, as the model's inputs (:meth:`command`)."""
         return self.command(state, self.move_to_goal(state, right_hand, self.speed))
 
     def command(self, state: Any, preferred: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -317,18 +308,9 @@ class Scenario:
                                 self.agent_limits)  # fmt: skip
 
     def steer(self, state: Any, preferred: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The velocity the scripted controller asks from the ``preferred`` ones: themselves,
-        or with ``nominal="rorca"`` the R-ORCA velocity closest to them
-        (``rsvo_env.control.rorca``) for the model's steered points (``Dynamics.steered``: the
-        unicycle's look-ahead points), bodies ``rorca_pad`` times theirs, horizon
-        ``rorca_tau``; with ``rorca_route``, the preferred velocities turned around the knots
-        ahead first (``rsvo_env.control.rorca_route``)."""
-        p = self.params
-        if p["nominal"] != "rorca":
-            return preferred
-        points, velocities, extra = self.model.steered(state, p)
-        return scripted_rorca.steer(state, preferred, points, velocities, self.radii + extra, p,
-                                    self.speed)  # fmt: skip
+        """The velocity the scripted controller (``nominal``) asks from the ``preferred`` ones
+        (``Controller.steer``)."""
+        return self.controller.steer(state, preferred, self)
 
     def move_to_goal(self, state: Any, right_hand: bool, speed: float) -> NDArray[np.float64]:
         """The move-to-goal velocity of norm at most ``speed``, turned by the right-hand rule

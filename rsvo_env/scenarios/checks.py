@@ -69,5 +69,7 @@ def check_scene_filter(scenario: Scenario, flt: SafetyFilter) -> None:
         model.per_agent_bodies and model.per_agent_limits
     ):
         raise ValueError(f"input bounds per agent are not available for the {model.name} yet")
-    if scenario.num_obstacles and type(model).obstacle_rows is Dynamics.obstacle_rows:
+    # a model takes obstacles by its obstacle rows, or by rows of its own that hold them
+    own = type(model).obstacle_rows, type(model).filter_rows
+    if scenario.num_obstacles and own == (Dynamics.obstacle_rows, Dynamics.filter_rows):
         raise ValueError(f"obstacles are not available for the {model.name} yet")

@@ -8,22 +8,8 @@ from numba import njit
 from numpy.typing import NDArray
 
 from rsvo_env import dynamics
-from rsvo_env.scenarios.base import COMMON_DEFAULTS, Scenario
-
-# R-ORCA routed around knots (rsvo_env.control.rorca_route), its rules set for crowds of 1,000
-# and 10,000 (docs/liveness.md, "Routing around knots"): a horizon of 1.25 s, bodies the
-# filter's, the goal rule after 1 s within one radius and at once for agents that have reached
-# their goals
-ROUTED = {
-    "rorca_route": True,
-    "rorca_tau": 1.25,
-    "rorca_pad": 1.0,
-    "rorca_goal_reach": 1.0,
-    "rorca_goal_hold": 1.0,
-    "rorca_goal_reached": True,
-}
-# R-ORCA's general rules (the other scenes'), as the crowd ran them before it routed
-UNROUTED = {key: COMMON_DEFAULTS[key] for key in ROUTED}
+from rsvo_env.control.rorca.controller import ROUTED
+from rsvo_env.scenarios.base import Scenario
 
 
 @njit(cache=True)
@@ -90,6 +76,7 @@ class Crowd(Scenario):
         "side_factor": 2.5,
         "max_steps": 2000,
         "nominal": "rorca",
+        # R-ORCA routed around knots, its rules set for crowds of 1,000 and 10,000 (its preset)
         **ROUTED,
     }
 

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 
 from rsvo_env import dynamics
 from rsvo_env.control import nominal
-from rsvo_env.dynamics.barriers import BARRIERS, SPLITS
+from rsvo_env.dynamics import barriers
 from rsvo_env.scenarios.base import Scenario
 from rsvo_env.util.validation import check_count, shown
 
@@ -102,6 +102,8 @@ class RampMerge(Scenario):
     name = "ramp_merge"
     dynamics = "double_integrator"
     fixed_agents = 2
+    # its scripted controller is the paper's lane follower, which nominal="move_to_goal" names
+    controllers = ("move_to_goal",)
     positive = (*Scenario.positive, "start_distance", "v_des", "k_v", "k_lat")
     nonnegative = (*Scenario.nonnegative, "v0")
     defaults = {
@@ -126,13 +128,8 @@ class RampMerge(Scenario):
     }
 
     def check(self) -> None:
-        if self.params["nominal"] != "move_to_goal":
-            raise ValueError(
-                f"ramp_merge.nominal = {shown(self.params['nominal'])}: the ramp merge's scripted "
-                "controller is the paper's lane follower (nominal='move_to_goal' names it)"
-            )
         # the filter's settings the scene names, checked with the filter off too
-        for key, names in (("barrier", BARRIERS), ("split", SPLITS)):
+        for key, names in (("barrier", barriers.names()), ("split", barriers.SPLITS)):
             if not isinstance(self.params[key], str) or self.params[key] not in names:
                 raise ValueError(
                     f"ramp_merge.{key} = {shown(self.params[key])}; use one of {names}"

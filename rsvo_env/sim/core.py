@@ -27,7 +27,7 @@ from rsvo_env.control.theta_action import theta_action_of
 from rsvo_env.filter.result import FilterResult, merge_stats
 from rsvo_env.filter.safety import FilterConfig, Known, SafetyFilter
 from rsvo_env.geometry.bodies import Bodies
-from rsvo_env.geometry.pairs import Floor
+from rsvo_env.responsibility.pair_weights import Floor
 from rsvo_env.responsibility.svo import Weighting, check_weighting
 from rsvo_env.scenarios import Scenario
 from rsvo_env.scenarios.checks import check_scene, check_scene_filter

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.geometry.pairs import Floor, floor_of, weight_floor
+from rsvo_env.responsibility.pair_weights import Floor, floor_of, weight_floor, weight_matrices
 from rsvo_env.responsibility.svo import (
     Weighting,
     min_pair_weight,
@@ -50,7 +50,7 @@ class Weights:
         mode = modes[int(idx[0])]
         if self.matrix is None and callable(mode):
             # a callable weighting needs its matrix: keep every env's from now on
-            self.matrix = np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
+            self.matrix = weight_matrices(theta, modes)
         if self.matrix is not None:
             # the core's scores are valid: a named mode skips weight_matrix's checks
             th = theta[idx]

@@ -15,13 +15,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from rsvo_env.dynamics.barriers import (
+from rsvo_env.dynamics.barriers.box import (
     box_support,
     braking_capability,
-    braking_rhs,
     largest_input,
     support_within,
 )
+from rsvo_env.dynamics.barriers.pair_rows import braking_rhs
 
 if TYPE_CHECKING:
     from rsvo_env.geometry.bodies import Bodies

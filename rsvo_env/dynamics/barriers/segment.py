@@ -1,7 +1,7 @@
 """The stopping-segment barrier of the double integrator (``docs/double_integrator.md``, "The
 stopping-segment barrier", the default): each agent's backup (braking along its velocity) sweeps
 the segment ``S_i = [p_i, q_i]``, ``q_i = p_i + v_i L_i / s_i``, ``L_i`` the stopping reach of
-``backup_barrier`` (eq. ``reach``); under the backup the next segment lies inside this one. The
+``stopping`` (eq. ``reach``); under the backup the next segment lies inside this one. The
 barrier is ``h_ij = dist(S_i, S_j) - r_i - r_j`` (``h_io = dist(S_i, segment_o) - r_i - rho_o``
 for an obstacle), so agents are charged the segment they will sweep, not a disk: touching agents
 at rest can part, agents side by side keep their speed.
@@ -29,11 +29,13 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env.dynamics.backup_barrier import (
+from rsvo_env.dynamics.barriers.box import braking_capability
+from rsvo_env.dynamics.barriers.stopping import (
     SETTLE,
     TRUST_SHRINK,
     AgentBoxes,
     AgentTerms,
+    StoppingBarrier,
     agent_terms,
     binding,
     kept_rows,
@@ -44,7 +46,6 @@ from rsvo_env.dynamics.backup_barrier import (
     stopping_reach,
     trust_box_rows,
 )
-from rsvo_env.dynamics.barriers import braking_capability
 from rsvo_env.geometry.segments import separate, separation
 from rsvo_env.qp.rows import Rows
 from rsvo_env.util.planar import norm
@@ -72,7 +73,7 @@ def segment_rows(
     """Every agent's rows of the stopping-segment barrier (module docstring) against the pairs
     (I, J) (weights (P, 2)) and the obstacles ``capsules`` ((E, O, 5) or (1, O, 5), ``n`` agents
     an env), stored by agent: two rows per pair, two per obstacle, then the four rows of its
-    trust box; as :func:`rsvo_env.dynamics.backup_barrier.backup_rows`. Returns the rows and each
+    trust box; as :func:`rsvo_env.dynamics.barriers.backup.backup_rows`. Returns the rows and each
     agent's smallest obstacle h (None without obstacles)."""
     radii, lo, hi = bodies.radii, bodies.lo, bodies.hi
     M = len(positions)
@@ -170,7 +171,7 @@ def _sampled_rows(
     """Rows 1 and 2 (eq. ``seg-rows``) of every directed row k (agent ``own[k]``, direction
     ``e[k]``, share ``sigma[k]``), those that can bind over the agent's trust box kept (all of
     them without ``cull``; an undefined row, of a body at another's centre, becomes
-    ``0 . a <= -1`` and is kept, so the QP says infeasible: ``backup_barrier.row_kept``).
+    ``0 . a <= -1`` and is kept, so the QP says infeasible: ``stopping.row_kept``).
     Returns each agent's trust radius, its smallest h, and the kept rows as (owner, A, b,
     neighbour, h): every kept row 1 in k order, then every kept row 2.
 
@@ -288,3 +289,11 @@ def segment_radii(
         S = _SQRT2 * dt * speed * 2.0 * m / (2.0 * c) + 2.0 * speed_max * A2
         rate = gamma * dt
     return radius_beyond(omega_floor, radii, stopping_reach(speed, c, dt), S, rate)
+
+
+class Segment(StoppingBarrier):
+    """The stopping-segment barrier (module docstring)."""
+
+    name = "segment"
+    rows = staticmethod(segment_rows)
+    radii = staticmethod(segment_radii)

@@ -23,6 +23,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from rsvo_env.util.grid import build_cells, cell_span
 from rsvo_env.util.validation import check_positive
 
 LOOK = 6.0  # safety radii from the agent to the point it probes
@@ -75,11 +76,10 @@ def routed(
 
 @njit(cache=True)
 def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
-    """:func:`routed` env by env: the stuck agents in a grid of cells a probe's diameter wide
-    (a probe's disk touches two per axis, so it visits four; cells of its radius, nine to
-    visit, cost 15 % more with every agent stuck), wider where the stuck agents are spread thin
-    (the cells number at most four per stuck agent); each probe a scan of the cells its disk
-    touches."""
+    """:func:`routed` env by env: the stuck agents in the spatial grid (``util.grid``) of cells
+    a probe's diameter wide (a probe's disk touches two per axis, so it visits four; cells of
+    its radius, nine to visit), wider where the stuck agents are spread thin (the cells number
+    at most four per stuck agent); each probe a scan of the cells its disk touches."""
     E, n = x.shape[0], x.shape[1]
     look, probe = LOOK * scale, PROBE * scale
     for e in range(E):
@@ -92,31 +92,12 @@ def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
                 m += 1
         if m < CROWDED:
             continue
-        lo_x, lo_y, hi_x, hi_y = np.inf, np.inf, -np.inf, -np.inf
+        pts = np.empty((m, 2))
         for k in range(m):
-            px, py = x[e, stuck[k], 0], x[e, stuck[k], 1]
-            lo_x, lo_y = min(lo_x, px), min(lo_y, py)
-            hi_x, hi_y = max(hi_x, px), max(hi_y, py)
-        cell = 2.0 * probe
-        while ((hi_x - lo_x) / cell + 1.0) * ((hi_y - lo_y) / cell + 1.0) > 4.0 * m + 64.0:
-            cell *= 2.0
-        nx, ny = int((hi_x - lo_x) / cell) + 1, int((hi_y - lo_y) / cell) + 1
-        start = np.zeros(nx * ny + 1, np.int64)
-        home = np.empty(m, np.int64)
-        for k in range(m):
-            i = stuck[k]
-            c = int((x[e, i, 0] - lo_x) / cell) * ny + int((x[e, i, 1] - lo_y) / cell)
-            home[k] = c
-            start[c + 1] += 1
-        for c in range(nx * ny):
-            start[c + 1] += start[c]
+            pts[k, 0], pts[k, 1] = x[e, stuck[k], 0], x[e, stuck[k], 1]
+        lo_x, lo_y, cell, nx, ny, start, order = build_cells(pts, 2.0 * probe)
         # the stuck agents' positions in cell order: a probe reads them contiguously
-        fill = start[:-1].copy()
-        xs = np.empty((m, 2))
-        for k in range(m):
-            xs[fill[home[k]], 0] = x[e, stuck[k], 0]
-            xs[fill[home[k]], 1] = x[e, stuck[k], 1]
-            fill[home[k]] += 1
+        xs = pts[order]
         grid = (lo_x, lo_y, cell, nx, ny)
         for i in range(n):
             if at_goal[e, i]:
@@ -156,10 +137,8 @@ def _count(xs, start, grid, px, py, radius, limit):
     no more). Cells the disk does not reach are skipped."""
     lo_x, lo_y, cell, nx, ny = grid
     r2 = radius * radius
-    c0 = max(int(np.floor((px - radius - lo_x) / cell)), 0)
-    c1 = min(int(np.floor((px + radius - lo_x) / cell)), nx - 1)
-    r0 = max(int(np.floor((py - radius - lo_y) / cell)), 0)
-    r1 = min(int(np.floor((py + radius - lo_y) / cell)), ny - 1)
+    c0, c1 = cell_span(px, radius, lo_x, cell, nx)
+    r0, r1 = cell_span(py, radius, lo_y, cell, ny)
     count = 0
     for a in range(c0, c1 + 1):
         # the gap from the point to the cell's column, then to the cell

@@ -1,5 +1,5 @@
 """One agent's R-ORCA velocity, in pieces both compiled stages share (``rsvo_env.control.rorca``
-over flat pair lists, ``rsvo_env.control.rorca_dense`` over each env's agents): its half-plane
+over flat pair lists, ``rsvo_env.control.rorca.dense`` over each env's agents): its half-plane
 against a neighbour (eq. ``rorca``), its shares of the avoidance and the slack, the K nearest,
 the solve within the speed disk with the sidestep, and the arrival cap."""
 

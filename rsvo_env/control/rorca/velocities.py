@@ -14,7 +14,7 @@ The velocity is the one closest to the preferred velocity within the half-planes
 disk, by ORCA's own linear programs (``rsvo_env.qp.disk``); where they leave no room, the
 velocity of the disk whose largest violation is least (ORCA's third). The R-CBF
 filter on top keeps the guarantee whatever this controller proposes. Envs of at most
-``sizes.ALL_PAIRS_MAX_AGENTS`` agents run :mod:`rsvo_env.control.rorca_dense`'s stage (the
+``sizes.ALL_PAIRS_MAX_AGENTS`` agents run :mod:`rsvo_env.control.rorca.dense`'s stage (the
 env's agents read in place, the weights from its matrix); larger ones this module's, over the
 pairs of the grid search.
 """
@@ -27,11 +27,12 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env.control import rorca_dense, rorca_grid
+from rsvo_env.control.rorca import dense as rorca_dense
+from rsvo_env.control.rorca import grid as rorca_grid
 
 # ARRIVE, GOAL_REACH, HOLD_SECONDS and SIDESTEP are the rules' constants, read through this
 # module
-from rsvo_env.control.rorca_agent import (  # noqa: F401
+from rsvo_env.control.rorca.agent import (  # noqa: F401
     ARRIVE,
     GOAL_REACH,
     HOLD_SECONDS,
@@ -42,12 +43,13 @@ from rsvo_env.control.rorca_agent import (  # noqa: F401
     goal_gap,
     plane,
 )
+from rsvo_env.responsibility import pair_weights
 from rsvo_env.responsibility.svo import Weighting, symmetric_envs
 from rsvo_env.util import sizes
 
 
 @njit(cache=True)
-def _half_planes(x, v, radii, I, J, share, tau, dt, parked, seen):
+def half_planes(x, v, radii, I, J, share, tau, dt, parked, seen):
     """Both directed half-planes of each pair (I, J): rows ``A . v <= b`` for agent I (first
     P) and agent J (last P), ``share`` (P, 2) each side's part of the avoidance (summing to 1;
     of the slack each side takes the other's share). An agent ``parked`` (M,) reads a neighbour
@@ -231,9 +233,9 @@ def rorca_velocities(
     compiled = (flags.reshape(M), hold, tied, float(reach), goal_hold)
     if n > sizes.ALL_PAIRS_MAX_AGENTS:  # a grid scan for each agent's K nearest, ORCA's way
         if omega is None and any(callable(m) for m in modes):
-            omega = rorca_dense.matrices(theta, modes)
+            omega = pair_weights.weight_matrices(theta, modes)
         out = rorca_grid.stage(n, motion, theta, symmetric_envs(modes), omega, compiled, settings)
     else:  # every other agent of the env within neighbor_dist, its weights from the matrices
-        W = rorca_dense.matrices(theta, modes) if omega is None else omega
+        W = pair_weights.weight_matrices(theta, modes) if omega is None else omega
         out = rorca_dense.stage(n, motion, W, compiled, settings)
     return out.reshape(E, n, 2)

@@ -2,19 +2,17 @@
 candidates are the others of its env within the cut, read in place, and its weights straight
 from the env's weight matrix (E, N, N), which the simulation core keeps
 (``rsvo_env.sim.weights``): no pair list, no neighbour lists, no weights computed again. The
-velocities are bit for bit those of the grid stage (``rsvo_env.control.rorca_grid``): the same
+velocities are bit for bit those of the grid stage (``rsvo_env.control.rorca.grid``): the same
 candidates in the same order (those after the agent in its env, then those before, the order
-of its pairs), the same arithmetic (``rsvo_env.control.rorca_agent``)."""
+of its pairs), the same arithmetic (``rsvo_env.control.rorca.agent``)."""
 
 from __future__ import annotations
-
-from collections.abc import Sequence
 
 import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
-from rsvo_env.control.rorca_agent import (
+from rsvo_env.control.rorca.agent import (
     cap_scale,
     cap_wanted,
     counts_parked,
@@ -26,23 +24,12 @@ from rsvo_env.control.rorca_agent import (
     solve,
     within,
 )
-from rsvo_env.responsibility.svo import Weighting, named_weights, symmetric_envs, weight_matrix
 from rsvo_env.util import threads
 from rsvo_env.util.borrowed import borrow
 from rsvo_env.util.planar import clip2
 
 # agents a chunk of the parallel form
 CHUNK = 64
-
-
-def matrices(theta: NDArray, modes: Sequence[Weighting]) -> NDArray[np.float64]:
-    """(E, N, N) each env's weight matrix from its scores ``theta`` (E, N) and weighting, the
-    numbers ``pairs.weights_of`` gives its pairs."""
-    if any(callable(m) for m in modes):
-        return np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
-    W = named_weights(np.ascontiguousarray(theta, dtype=np.float64), "asymmetric")
-    W[symmetric_envs(modes)] = 0.5
-    return W
 
 
 @njit(cache=True)

@@ -1,6 +1,6 @@
 """The double integrator's culling radii under the braking and HOCBF barriers: beyond them none
 of an agent's rows can bind (``docs/double_integrator.md``; the backup barrier's are in
-``backup_barrier``)."""
+``backup``)."""
 
 from __future__ import annotations
 

@@ -6,10 +6,10 @@ order, so a neighbourhood is a few runs of consecutive memory (a crowd of 10,000
 misses the cache at nearly every neighbour).
 
 The velocities are bit for bit those R-ORCA assembled pair by pair gives (``tests/test_rorca.py``)
-and the dense stage's (``rsvo_env.control.rorca_dense``): the same candidates (within the cut,
+and the dense stage's (``rsvo_env.control.rorca.dense``): the same candidates (within the cut,
 ``d^2 <= cut^2`` as the grid pair search decides it), the same K nearest with ties broken by the
 order of the agent's pairs (its neighbours after it, then those before it), the rows stacked in
-that order, the same arithmetic (``rsvo_env.control.rorca_agent``) and the same weights (the
+that order, the same arithmetic (``rsvo_env.control.rorca.agent``) and the same weights (the
 libm cosine numpy's takes too, of the same shares; or the env's matrix, read)."""
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
-from rsvo_env.control.rorca_agent import (
+from rsvo_env.control.rorca.agent import (
     cap_scale,
     cap_wanted,
     counts_parked,
@@ -170,8 +170,8 @@ def _weigh_block(lo, hi, n, perm, ths, lists, W, weight):
     lower index) and the second's: the matrices ``W`` (E * n, n)'s entries, or without them
     (``W`` empty) ``cos(pi theta_first / (theta_first + theta_second))`` into
     ``weight[..., 0]``, turned into weights where they are read (:func:`_solve_block`). The
-    cosine is libm's, as numpy's (``geometry.pairs.scored_pairs``), in a loop of its own: in
-    the solve's it costs four times as much."""
+    cosine is libm's, as numpy's (``responsibility.pair_weights.scored_pairs``), in a loop of
+    its own: in the solve's it costs four times as much."""
     nbr, count = lists[1], lists[2]
     matrix = W.shape[0] > 0
     for s in range(lo, hi):
@@ -196,7 +196,7 @@ def _solve_block(lo, hi, n, perm, data, lists, weighting, tied, settings, space,
     ``out`` (M, 2) at their own indices, clipped to the speed limit. ``weighting`` (weight,
     symmetric, cosines): the weights ``weight`` (M, K, 2), or with ``cosines``
     ``(1 + weight[..., 0]) / 2`` and 1 minus that (1/2 in the ``symmetric`` (E,) envs), as
-    ``geometry.pairs.scored_pairs`` gives them.
+    ``responsibility.pair_weights.scored_pairs`` gives them.
     ``space``: the rows' and the solver's scratch, borrowed (``util.borrowed``)."""
     xs, vs, gs, ps, rs, ths, parks, holds = data
     pref, nbr, count = lists

@@ -1,15 +1,9 @@
-"""Pairwise barrier rows of the responsibility-weighted QP, vectorised over all pairs.
-
-Every unordered pair (i, j) gives one row to each of its agents, ``A_i u_i <= b_i`` and
-``A_j u_j <= b_j``, whose sum is the centralized CBF condition of the pair. Rows are stored by
-agent (:class:`rsvo_env.qp.rows.Rows`). A batch of E envs is one flat set of
-E * N agents: agent ``e * N + i`` is agent i of env e, and pairs never cross envs.
-
-* Single integrator (paper, eq. ``qp``): ``A_i = -2 (x_i - x_j)``, ``b_i = omega_ij gamma h_ij``,
-  ``h_ij = |x_i - x_j|^2 - R^2``.
-* Double integrator (``docs/double_integrator.md``): one pair row
-  ``c (-dp.a_i + dp.a_j) <= RHS`` split into ``-c dp.a_i <= s_ij`` and ``c dp.a_j <= s_ji``
-  with ``s_ij + s_ji = RHS``.
+"""The braking and HOCBF barriers' pair rows for the double integrator
+(``docs/double_integrator.md``), vectorised over all pairs: one pair row
+``c (-dp.a_i + dp.a_j) <= RHS`` split into ``-c dp.a_i <= s_ij`` and ``c dp.a_j <= s_ji`` with
+``s_ij + s_ji = RHS``, each agent's row stored by agent (:class:`rsvo_env.qp.rows.Rows`). A batch
+of E envs is one flat set of E * N agents: agent ``e * N + i`` is agent i of env e, and pairs
+never cross envs.
 """
 
 from __future__ import annotations
@@ -18,136 +12,19 @@ from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
-from rsvo_env.dynamics.sampled import sampled_braking_rhs
-from rsvo_env.qp.rows import PairFlags, Rows, finish, support
+from rsvo_env.dynamics.barriers.box import (
+    box_support,
+    braking_capability,
+    largest_input,
+    support_within,
+)
+from rsvo_env.dynamics.barriers.sampled import sampled_braking_rhs
+from rsvo_env.qp.rows import PairFlags, Rows, finish
 from rsvo_env.util.validation import shown
 
-__all__ = ["Rows", "support"]
-
-# "segment" (rsvo_env.dynamics.segment_barrier) is the double integrator's default; "backup" (the
-# stopping disk), "braking" and "hocbf" are kept by name for comparison
-BARRIERS = ("segment", "backup", "braking", "hocbf")
 SPLITS = ("capability", "sign_aware", "paper")
-
-
-def support_within(
-    d: NDArray, lo: NDArray, hi: NDArray, g: NDArray, s: NDArray
-) -> NDArray[np.float64]:
-    """``max d . a`` over the box ``lo <= a <= hi`` ((2,), or one per row (k, 2)) cut by the
-    half-plane ``g . a <= s`` (rows (k, 2)), taken at the polygon's vertices: the box corners
-    inside the half-plane and the half-plane's line crossing the box edges. The caller ensures
-    the polygon is not empty.
-    """
-    lo, hi = np.broadcast_to(lo, d.shape), np.broadcast_to(hi, d.shape)
-    cand = [np.stack([a[:, 0], b[:, 1]], -1) for a in (lo, hi) for b in (lo, hi)]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        for axis in (0, 1):
-            other = 1 - axis
-            for edge in (lo[:, axis], hi[:, axis]):
-                t = (s - g[:, axis] * edge) / g[:, other]
-                point = np.empty_like(d)
-                point[:, axis], point[:, other] = edge, t
-                cand.append(point)
-    best = np.full(len(d), -np.inf)
-    # the edge points are on the line to rounding: a relative hair of slack keeps them
-    scale = np.maximum(np.abs(lo), np.abs(hi)).max(axis=1)
-    tol = 1e-12 * (np.abs(g).sum(axis=1) * scale + np.abs(s))
-    for c in cand:
-        inside = (np.einsum("kd,kd->k", g, c) <= s + tol) & (c >= lo).all(axis=1)
-        inside &= (c <= hi).all(axis=1) & np.isfinite(c).all(axis=1)
-        best = np.where(inside, np.maximum(best, np.einsum("kd,kd->k", d, c)), best)
-    return best
-
-
-def braking_capability(lo: NDArray, hi: NDArray) -> NDArray[np.float64]:
-    """The deceleration a box guarantees along any direction, ``min(-lo, hi)`` over both axes
-    (the inscribed square's half-width); boxes (..., 2)."""
-    return np.minimum(-lo, hi).min(axis=-1)
-
-
-def largest_input(lo: NDArray, hi: NDArray) -> NDArray[np.float64]:
-    """The longest input vector of a box, ``|max(|lo|, |hi|)|``; boxes (..., 2)."""
-    m = np.maximum(np.abs(lo), np.abs(hi))
-    return np.hypot(m[..., 0], m[..., 1])
-
-
-def box_support(A: NDArray, lo: NDArray, hi: NDArray) -> NDArray:
-    """``max_{lo <= u <= hi} A . u`` for rows A (..., 2): the largest value a row can take."""
-    m = np.maximum(A * lo, A * hi)
-    return m[..., 0] + m[..., 1]  # rows are 2-D: a sum over the last axis costs more
-
-
-@njit(cache=True, inline="always")
-def single_integrator_row(xi0, xi1, xj0, xj1, w, gamma, R2):
-    """Agent i's row against j (paper, eq. ``qp``): ``A = -2 (x_i - x_j)``,
-    ``b = omega_ij gamma h_ij`` with ``h_ij = |x_i - x_j|^2 - R^2``. Returns (ax, ay, b, h)."""
-    dx = xi0 - xj0
-    dy = xi1 - xj1
-    h = (dx * dx + dy * dy) - R2
-    return -2.0 * dx, -2.0 * dy, w * gamma * h, h
-
-
-@njit(cache=True)
-def _single_integrator_pairs(x, I, J, w, gamma, radii):
-    """Per pair: ``A_i = -2 dx``, ``h = |dx|^2 - (r_i + r_j)^2``, ``b = omega gamma h`` for
-    both agents."""
-    P = I.shape[0]
-    A_i = np.empty((P, 2))
-    b_i = np.empty(P)
-    b_j = np.empty(P)
-    h = np.empty(P)
-    for p in range(P):
-        i, j = I[p], J[p]
-        R = radii[i] + radii[j]
-        ax, ay, b_i[p], h[p] = single_integrator_row(
-            x[i, 0], x[i, 1], x[j, 0], x[j, 1], w[p, 0], gamma, R * R
-        )
-        A_i[p, 0] = ax
-        A_i[p, 1] = ay
-        b_j[p] = w[p, 1] * gamma * h[p]
-    return A_i, b_i, b_j, h
-
-
-def single_integrator_rows(
-    positions: NDArray,
-    omega_pairs: NDArray,
-    I: NDArray,
-    J: NDArray,
-    gamma: float,
-    safety_radius: float | NDArray,
-    lo: NDArray,
-    hi: NDArray,
-    cull: bool = True,
-) -> Rows:
-    """Rows of the paper's QP (eq. ``qp``, Thm. 1) for the pairs (I, J).
-
-    ``omega_pairs`` (P, 2): column 0 is omega of agent ``I[p]`` against ``J[p]``, column 1 the
-    other way round; the two sum to 1, so the two rows sum to eq. ``centralized-cbf``.
-    ``safety_radius``: every pair's safe distance, or (n,) body radii (a pair's is
-    ``r_i + r_j``); ``lo``, ``hi``: one box (2,) or one per agent (n, 2).
-    """
-    n = positions.shape[0]
-    A_i, b_i, b_j, h = _single_integrator_pairs(
-        np.ascontiguousarray(positions, dtype=np.float64),
-        I,
-        J,
-        np.ascontiguousarray(omega_pairs, dtype=np.float64),
-        float(gamma),
-        body_radii(safety_radius, n),
-    )
-    none = np.zeros(len(I), dtype=bool)
-    return finish(n, I, J, A_i, b_i, b_j, h, lo, hi, PairFlags(~none, none, none), cull)
-
-
-def body_radii(safety_radius: float | NDArray, n: int) -> NDArray[np.float64]:
-    """(n,) body radii: the given ones, or half of one pair distance for every agent (exact:
-    ``R / 2 + R / 2 == R``, so identical agents keep the pair distance to the last bit)."""
-    if np.ndim(safety_radius) == 0:
-        return np.full(n, 0.5 * float(safety_radius))
-    return np.ascontiguousarray(safety_radius, dtype=np.float64)
 
 
 def braking_rhs(
@@ -244,7 +121,7 @@ def double_integrator_rows(
     ``RHS = (|dv|^2 - q^2) - A |dp| + gamma h A |dp| / (-q)``. While opening there is no row,
     unless ``dt`` is given: then the one-step row
     ``RHS = (|dv|^2 - q^2) + 2 |dp| (q + gamma (|dp| - Ds)) / dt``, and for every pair the
-    sampled-data bound :func:`rsvo_env.dynamics.sampled.sampled_braking_rhs`
+    sampled-data bound :func:`rsvo_env.dynamics.barriers.sampled.sampled_braking_rhs`
     (``h+ >= (1 - gamma dt) h`` at the next sample), the smallest RHS of the three; where that
     bound's reversal term puts it beyond the box, the pair also gets a row keeping its tangential
     relative speed from changing sign within the step (``-e_t.(a_i - a_j) <= w_t / dt``).
@@ -256,11 +133,6 @@ def double_integrator_rows(
     ``RHS < -(cap_i + cap_j)`` the pair is unrecoverable and each takes ``RHS / 2``).
     """
     gamma, safety_radius, lo, hi, barrier, split, gamma2, dt = spec
-    if barrier not in ("braking", "hocbf"):
-        raise ValueError(
-            f"barrier {shown(barrier)} has no pair rows here; use 'braking' or 'hocbf' "
-            "('segment', 'backup': their modules' rows)"
-        )
     if split not in SPLITS:
         raise ValueError(f"split {shown(split)} is unknown; use one of {SPLITS}")
     n = positions.shape[0]
