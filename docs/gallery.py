@@ -2,7 +2,7 @@
 how to make it) and the gallery page that shows them all.
 
     python docs/gallery.py            # the pages and every picture (about two minutes)
-    python docs/gallery.py --pages    # the pages alone (what tests/test_docs.py checks)
+    python docs/gallery.py --pages    # the pages alone (what tests/project/test_docs.py checks)
     python docs/gallery.py --models   # the pictures of scenes with another model (MODEL_SCENES)
 
 The pages come from the code (each scenario's docstring and defaults, the registry's ids and

@@ -2,8 +2,8 @@
 assignment on every seed in one batched env.
 
 The objective of the personality search (:mod:`rsvo_env.training.theta_search`) and the fixed rows
-of ``benchmarks/personalities.py``. Steps, not seconds: the paper reports its circular game in steps
-of 0.01 s.
+of ``benchmarks/studies/personalities.py``. Steps, not seconds: the paper reports its circular game
+in steps of 0.01 s.
 """
 
 from __future__ import annotations

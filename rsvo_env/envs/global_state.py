@@ -8,7 +8,7 @@ One flat float32 vector per env, in world coordinates, agents in ``possible_agen
   and radius (a circle is a capsule whose ends coincide).
 
 Every agent's observation is a function of this vector (and the weighting mode, which gives
-omega from the thetas): ``tests/test_global_state.py`` rebuilds the observations from it.
+omega from the thetas): ``tests/envs/test_global_state.py`` rebuilds the observations from it.
 """
 
 from __future__ import annotations

@@ -3,11 +3,11 @@ bounds and measured where its comment says. Read as ``sizes.NAME`` where used (n
 value), so that a test may move one."""
 
 # Agents an env up to which every pair is examined: below it, all pairs cost less than a grid
-# or KD-tree search (benchmarks/knn_speed.py).
+# or KD-tree search (benchmarks/speed/knn_speed.py).
 ALL_PAIRS_MAX_AGENTS = 64
 
 # Agents an env up to which the filter takes its compiled all-pairs pass rather than the pair
-# search, row packing and batched solve (benchmarks/dense_filter_speed.py). With equal scores,
+# search, row packing and batched solve (benchmarks/speed/dense_filter_speed.py). With equal scores,
 # the scenarios' default, the two break even at 256; with scores spread over 1..10 the general
 # path's wider search lets the dense pass win up to about 450.
 COMPILED_FILTER_MAX_AGENTS = 256
@@ -24,12 +24,12 @@ PARALLEL_MIN_PROBLEMS = 256
 # numba compiles a prange body as a function of its own whose arrays it marks free of aliasing
 # (parfor lowering), and the compiler then keeps the inner loops' values in registers. On one
 # thread a launch costs about 1 us and waits for no other thread, so it cannot stall under
-# load. Measured for the dense filter pass and the CSR solve (benchmarks/kernel_forms.py): the
+# load. Measured for the dense filter pass and the CSR solve (benchmarks/speed/kernel_forms.py): the
 # prange form takes 1.35x the serial form's time at 6 agents, 1.10x at 32, 0.61x to 0.99x from
 # 48 on.
 PRANGE_FORM_MIN_AGENTS = 64
 
-# Which k-nearest-neighbour kernel serves which batch (measured with benchmarks/knn_speed.py,
+# Which k-nearest-neighbour kernel serves which batch (measured with benchmarks/speed/knn_speed.py,
 # one thread, on positions drifting as an env steps them). Insertion costs ~n^2 k with a branch
 # per candidate, which the predictor learns while a step's E n agents are few and their order
 # changes little; ranking ~n^3 per env whatever k, without branches; the env-lanes kernel

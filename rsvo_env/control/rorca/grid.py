@@ -5,12 +5,12 @@ for a pair kept. The agents are visited in cell order, reading copies of their d
 order, so a neighbourhood is a few runs of consecutive memory (a crowd of 10,000 in index order
 misses the cache at nearly every neighbour).
 
-The velocities are bit for bit those R-ORCA assembled pair by pair gives (``tests/test_rorca.py``)
-and the dense stage's (``rsvo_env.control.rorca.dense``): the same candidates (within the cut,
-``d^2 <= cut^2`` as the grid pair search decides it), the same K nearest with ties broken by the
-order of the agent's pairs (its neighbours after it, then those before it), the rows stacked in
-that order, the same arithmetic (``rsvo_env.control.rorca.agent``) and the same weights (the
-libm cosine numpy's takes too, of the same shares; or the env's matrix, read)."""
+The velocities are bit for bit those R-ORCA assembled pair by pair gives
+(``tests/control/test_rorca.py``) and the dense stage's (``rsvo_env.control.rorca.dense``): the same
+candidates (within the cut, ``d^2 <= cut^2`` as the grid pair search decides it), the same K nearest
+with ties broken by the order of the agent's pairs (its neighbours after it, then those before it),
+the rows stacked in that order, the same arithmetic (``rsvo_env.control.rorca.agent``) and the same
+weights (the libm cosine numpy's takes too, of the same shares; or the env's matrix, read)."""
 
 from __future__ import annotations
 

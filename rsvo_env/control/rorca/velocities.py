@@ -91,7 +91,7 @@ def arrival_capped(
     look-ahead ``|preferred| tau`` passes the goal by more than the gap between the goal and a
     neighbour's body (pairs I, J; flat (M, 2) positions and goals, radii (M,)); with ``held``
     (M,), only there. The compiled stages cap as they scan; this form over a pair list is
-    their reference (``tests/test_rorca.py``)."""
+    their reference (``tests/control/test_rorca.py``)."""
     M = len(positions)
     f = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
     hold = np.ones(M, dtype=np.bool_) if held is None else np.ascontiguousarray(held)
