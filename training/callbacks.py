@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
-from rsvo_env.training.evaluation import (
+from rsvo_env.training.seeded_episodes import (
     append_validation,
     intervened,
     model_policy,

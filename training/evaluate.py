@@ -25,7 +25,7 @@ from typing import Any
 from rsvo_env.training import config as configs
 from rsvo_env.training.algorithms import algorithm_class
 from rsvo_env.training.config import make_env
-from rsvo_env.training.evaluation import (
+from rsvo_env.training.seeded_episodes import (
     evaluation_cap,
     model_policy,
     paired,

@@ -4,7 +4,7 @@ SB3 path, PPO with one RLModule shared by every agent.
 ``train_rllib`` builds RLlib's PPO from a resolved config (its ``rllib`` section), on a local Ray
 instance or on a running cluster (``address``), with ``num_env_runners`` sampling processes of
 ``num_envs_per_env_runner`` envs each. Every iteration appends to ``progress.csv`` (and TensorBoard
-when installed); validation runs our own protocol (:mod:`rsvo_env.training.evaluation`) on the
+when installed); validation runs our own protocol (:mod:`rsvo_env.training.seeded_episodes`) on the
 shared module; checkpoints are RLlib's (``checkpoint/``, ``best_checkpoint/``,
 ``checkpoints/step_N``), beside the run's ``config.yaml``.
 """
@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from rsvo_env.training import config as configs
-from rsvo_env.training.evaluation import (
+from rsvo_env.training.seeded_episodes import (
     append_validation,
     run_episodes,
     summarize,

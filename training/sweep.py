@@ -42,8 +42,8 @@ def trial(params: dict[str, Any]) -> None:
     """One Tune trial: train, then evaluate on the held-out seeds; reports as it goes."""
     from ray import tune
 
-    from rsvo_env.training.evaluation import run_episodes, summarize
     from rsvo_env.training.rllib_engine import SHARED, agent_steps, build, module_policy
+    from rsvo_env.training.seeded_episodes import run_episodes, summarize
 
     cfg = params["cfg"]
     algo = build(cfg, 0, 1).build_algo()

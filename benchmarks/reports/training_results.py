@@ -20,7 +20,7 @@ import numpy as np
 
 from rsvo_env.training.config import limit_threads
 from rsvo_env.training.evaluate import load_model
-from rsvo_env.training.evaluation import (
+from rsvo_env.training.seeded_episodes import (
     evaluation_cap,
     paired,
     run_episodes,

@@ -12,13 +12,11 @@ Writes ``benchmarks/results/bodies_speed.md``. Run from a checkout:
 from __future__ import annotations
 
 import argparse
-import time
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-from benchmarks.harness import machine
+from benchmarks.harness import alternate, machine
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -34,19 +32,6 @@ def crowd(n: int, seed: int = 0):
     d = goals - x
     nominal = 2.0 * d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-9)
     return x, nominal, rng.uniform(0.0, 10.0, n), rng.uniform(0.2, 2.0, n), rng.uniform(0.5, 3, n)
-
-
-def alternate(calls: dict[str, Callable[[], object]], blocks: int) -> dict[str, float]:
-    """Best wall time of each call over ``blocks`` alternating rounds (after a warm-up)."""
-    for f in calls.values():
-        f()
-    best = dict.fromkeys(calls, np.inf)
-    for _ in range(blocks):
-        for name, f in calls.items():
-            t0 = time.perf_counter()
-            f()
-            best[name] = min(best[name], time.perf_counter() - t0)
-    return best
 
 
 def measure(n: int, si: SafetyFilter, uni: SafetyFilter, blocks: int) -> dict[str, float]:

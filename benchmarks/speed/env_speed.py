@@ -32,8 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.harness import machine
-from benchmarks.speed.single_env_speed import best
+from benchmarks.harness import best_rates, machine
 from rsvo_env.envs.vector import BatchedEnv
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -194,7 +193,7 @@ def main(argv: list[str] | None = None) -> int:
         makers = {"ours": lambda n=n, e=e, seen=seen: batched(n, e, seen)}
         if vmas is not None:
             makers["vmas"] = lambda n=n, e=e: vmas_navigation(n, e)
-        r = best(makers, args.seconds, args.repeats)
+        r = best_rates(makers, args.seconds, args.repeats)
         v = r.get("vmas")
         lines.append(
             f"| {n} | {e} | {r['ours']:,.0f} | {seen[(n, e)]:.12f} | "

@@ -218,7 +218,7 @@ def main(argv: list[str] | None = None) -> int:
         "0.67 and 0.57, and 0.36x; at 35df801, each agent's K nearest by a grid scan in cell "
         "order in one compiled call (`rsvo_env.control.rorca.grid`), 0.41, 0.43 and 0.41, and "
         "0.35x. Since, the compiled stages hand their inlined helpers scalars and borrow their "
-        "scratch (`rsvo_env.util.borrowed`): an array handed to an inlined numba function costs "
+        "scratch (`rsvo_env.util.scratch`): an array handed to an inlined numba function costs "
         "two atomic reference counts, and perf put a quarter of the dense stage's time in them; "
         "the dense stage ranks its K nearest without a branch and tests the cut without a "
         "square root; the grid stage lists the scanned agents within the cut without a branch "

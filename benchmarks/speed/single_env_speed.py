@@ -22,12 +22,12 @@ import argparse
 import importlib
 import json
 import sys
-import time
 from collections.abc import Callable
 
 import numpy as np
 
 import rsvo_env
+from benchmarks.harness import best_rates
 
 
 def single_env(scenario: str, filtered: bool, filter_kwargs: dict | None = None, **kwargs):
@@ -45,27 +45,6 @@ def single_env(scenario: str, filtered: bool, filter_kwargs: dict | None = None,
     if filtered:  # a library before 1.0: its top-level ``wrappers`` (imported by name)
         env = importlib.import_module("wrappers").RCBFSafetyFilter(env, **given)
     return env
-
-
-def rate(step: Callable[[], None], agents: int, seconds: float) -> float:
-    """Agent-steps per second of ``step`` over about ``seconds``."""
-    steps, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds:
-        step()
-        steps += 1
-    return agents * steps / (time.perf_counter() - t0)
-
-
-def best(makers: dict[str, Callable[[], tuple[Callable, int]]], seconds: float, repeats: int):
-    """Best rate of each named benchmark over ``repeats`` rounds, the benchmarks alternating."""
-    built = {name: make() for name, make in makers.items()}
-    for step, _ in built.values():
-        step()  # warm: numba compiles, caches fill
-    rates = {name: 0.0 for name in built}
-    for _ in range(repeats):
-        for name, (step, agents) in built.items():
-            rates[name] = max(rates[name], rate(step, agents, seconds))
-    return rates
 
 
 def crowd(n: int, filtered: bool):
@@ -115,7 +94,7 @@ def reference(n: int) -> tuple[Callable, int]:
 
 def rates(n: int, seconds: float, repeats: int) -> dict[str, float]:
     """Agent-steps per second of the bare env, the filtered env and the reference, at n agents."""
-    return best(
+    return best_rates(
         {
             "reference": lambda: reference(n),
             "bare": lambda: single(n, False),

@@ -35,8 +35,8 @@ from benchmarks.reports.liveness_report import replace_section
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.training.config import limit_threads
 from rsvo_env.training.evaluate import load_model
-from rsvo_env.training.evaluation import run_episodes
 from rsvo_env.training.personalities import alternating, evaluate
+from rsvo_env.training.seeded_episodes import run_episodes
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "benchmarks" / "results"

@@ -34,7 +34,7 @@ import numpy as np
 from rsvo_env.training import config as configs
 from rsvo_env.training.config import limit_threads
 from rsvo_env.training.evaluate import load_model
-from rsvo_env.training.evaluation import run_episodes, scripted_policy, summarize
+from rsvo_env.training.seeded_episodes import run_episodes, scripted_policy, summarize
 
 ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "benchmarks" / "results"

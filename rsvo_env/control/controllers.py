@@ -43,6 +43,13 @@ class Controller:
         ``rh_hold`` is None (0: the rule turns every agent it fires for)."""
         return 0.0
 
+    def nominal(self, state: Any, scenario: Any, right_hand: bool) -> NDArray:
+        """The velocities (E, N, 2) the agents ask: :meth:`steer` of the ``scenario``'s
+        move-to-goal velocities (turned by the right-hand rule unless ``right_hand`` is False).
+        A controller whose compiled stage computes those too overrides it."""
+        preferred = scenario.move_to_goal(state, right_hand, scenario.speed)
+        return self.steer(state, preferred, scenario)
+
     def steer(self, state: Any, preferred: NDArray, scenario: Any) -> NDArray:
         """The velocities (E, N, 2) the agents ask from the ``preferred`` ones, for the
         ``scenario`` (its model's steered points, bodies, speed and ``controller_settings``)."""

@@ -19,7 +19,9 @@ from rsvo_env.util.planar import as_rows, clip2, clip_norm, norm
 
 
 @njit(cache=True)
-def _move_to_goal(x, g, k, limit, turn, c, s, out):
+def move_to_goal_into(x, g, k, limit, turn, c, s, out):
+    """:func:`move_to_goal` on flat rows (M, 2) into ``out``: ``turn`` (M,) the rows the
+    right-hand rule turns by the rotation ``c``, ``s`` (:func:`clockwise`)."""
     for i in range(x.shape[0]):
         ux, uy = clip2(-k * (x[i, 0] - g[i, 0]), -k * (x[i, 1] - g[i, 1]), limit)
         if turn[i]:
@@ -28,7 +30,7 @@ def _move_to_goal(x, g, k, limit, turn, c, s, out):
 
 
 @functools.lru_cache(maxsize=32)
-def _clockwise(angle_deg: float) -> tuple[float, float]:
+def clockwise(angle_deg: float) -> tuple[float, float]:
     """cos and sin of a clockwise turn by ``angle_deg``."""
     angle = -math.radians(angle_deg)
     return float(np.cos(angle)), float(np.sin(angle))
@@ -55,8 +57,8 @@ def move_to_goal(
         active = np.broadcast_to(_NEVER, (x.shape[0],))
     else:
         active = np.ascontiguousarray(turn).reshape(-1)
-    c, s = _clockwise(float(angle_deg))
-    _move_to_goal(x, g, float(k), float(u_max), active, c, s, out)
+    c, s = clockwise(float(angle_deg))
+    move_to_goal_into(x, g, float(k), float(u_max), active, c, s, out)
     return out.reshape(shape)
 
 

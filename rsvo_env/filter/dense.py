@@ -52,9 +52,8 @@ def _one_env(
         # One pass over the neighbours: the rows that can bind in the box (b < support), in
         # neighbour order, each marked if it can also bind in the disk [0, nominal]; then, if
         # no row has b < 0 (the agent is not exempt, rsvo_env.filter.projection_disk), only the
-        # marked ones are kept. Measured (the prange form on one thread, 4 x 256 agents): 63 us
-        # a call, against 82 us for a branch-free first pass over copies of the positions and a
-        # second pass.
+        # marked ones are kept: one pass costs less than a branch-free first pass over copies of
+        # the positions and a second (benchmarks/results/dense_filter_speed.md).
         k = 0
         b_min = 0.0
         for j in range(n):

@@ -45,7 +45,7 @@ from rsvo_env.util.planar import norm, turn
 from rsvo_env.util.validation import check_theta, check_vectors, real_array
 
 
-class Known(NamedTuple):
+class KnownScenes(NamedTuple):
     """What a caller of :meth:`SafetyFilter.apply` already knows of its scenes: each scene's
     smallest weight ``omega_min`` (E,), each agent's nearest distance ``nearest`` (E, N), and
     ``floor``, :func:`pair_weights.weight_floor` of the weights."""
@@ -215,7 +215,7 @@ class SafetyFilter:
         velocities: NDArray[np.float64] | None = None,
         omega: NDArray[np.float64] | None = None,
         with_rows: bool = False,
-        known: Known | None = None,
+        known: KnownScenes | None = None,
         weighting: Sequence[Weighting] | None = None,
         bodies: Bodies | None = None,
         obstacles: NDArray | None = None,
@@ -226,16 +226,16 @@ class SafetyFilter:
         One call of the row builder and one of the solver serve all E x N agents. Dense
         single-integrator scenes with the exact solver take one compiled pass (``solvers.dense``,
         the same arithmetic) unless ``with_rows`` asks for the rows. A caller that keeps them passes
-        them as ``known`` (:class:`Known`), which the large-N path needs. There, each agent examines
-        its neighbours within its own radius (:func:`pairs.agent_radii`, or the model's
+        them as ``known`` (:class:`KnownScenes`), which the large-N path needs. There, each agent
+        examines its neighbours within its own radius (:func:`pairs.agent_radii`, or the model's
         ``culling_radii`` from the current velocities): exact culling, so the rows kept, and the
         solution, are those of all pairs. ``bodies``: each agent's radius and box (None: the
         config's); ``obstacles``: capsules (O, 5) or (E, O, 5)
-        (:class:`rsvo_env.geometry.obstacles.Obstacles`);
-        the model's own state (its ``state_fields``: the unicycle's ``headings`` (E, N)).
+        (:class:`rsvo_env.geometry.obstacles.Obstacles`); the model's own state (its
+        ``state_fields``: the unicycle's ``headings`` (E, N)).
         """
         cfg = self.config
-        omega_min, nearest, floor = Known() if known is None else known
+        omega_min, nearest, floor = KnownScenes() if known is None else known
         E, n = theta.shape
         if bodies is None:  # the config's, kept: a simulator calls with the same shape
             bodies = self._default_bodies.get((E, n))

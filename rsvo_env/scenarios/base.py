@@ -298,8 +298,10 @@ class Scenario:
     def nominal(self, state: Any, right_hand: bool = True) -> NDArray[np.float64]:
         """Scripted nominal controls (E, N, 2) in physical units: move-to-goal (paper, Sec. V-A)
         plus the right-hand rule (unless ``right_hand`` is False), or the velocity the scripted
-        controller (``nominal``) asks toward it, as the model's inputs (:meth:`command`)."""
-        return self.command(state, self.move_to_goal(state, right_hand, self.speed))
+        controller (``nominal``) asks toward it (``Controller.nominal``), as the model's inputs
+        (``Dynamics.track``)."""
+        velocity = self.controller.nominal(state, self, right_hand)
+        return self.model.track(state, velocity, self.params, self.agent_limits)
 
     def command(self, state: Any, preferred: NDArray[np.float64]) -> NDArray[np.float64]:
         """The scripted controller's inputs from the ``preferred`` velocities: the model's

@@ -25,7 +25,7 @@ from rsvo_env.control.residual import Residual
 from rsvo_env.control.stall import StallClock, deadlock_steps, goal_distance
 from rsvo_env.control.theta_action import theta_action_of
 from rsvo_env.filter.result import FilterResult, merge_stats
-from rsvo_env.filter.safety import FilterConfig, Known, SafetyFilter
+from rsvo_env.filter.safety import FilterConfig, KnownScenes, SafetyFilter
 from rsvo_env.geometry.bodies import Bodies
 from rsvo_env.responsibility.pair_weights import Floor
 from rsvo_env.responsibility.svo import Weighting, check_weighting
@@ -135,7 +135,7 @@ class Simulator:
             self.limits = replace(self.limits, stall=self.stall.bound(self.max_steps))
         self.deadlock_window = deadlock_steps(self.dt)
         # the after-integration stage in one compiled call where the scenario allows it
-        self.fused_post_step = post_step.fusable(scenario, n)
+        self.post_step_in_one_call = post_step.one_call_serves(scenario, n)
 
     def spaces(self) -> tuple[gymnasium.spaces.Box, gymnasium.spaces.Box]:
         """One agent's observation and action spaces (bounded Boxes, float32)."""
@@ -321,7 +321,7 @@ class Simulator:
                 s.theta,
                 vel,
                 self.weights.matrix,
-                known=Known(self.weights.omega_min, s.nearest, self._floor()),
+                known=KnownScenes(self.weights.omega_min, s.nearest, self._floor()),
                 weighting=self.weights.pair_modes(s.weighting),
                 bodies=self._filter_bodies(flt),
                 obstacles=obstacles,
@@ -349,7 +349,7 @@ class Simulator:
         u, stats, intervention = self.apply_filters(u_nominal)
         before, model = s.positions, sc.model
         model.advance_state(s, u, self.dt, sc.params)
-        after = post_step.fused if self.fused_post_step else post_step.by_hooks
+        after = post_step.in_one_call if self.post_step_in_one_call else post_step.hook_by_hook
         reward, terminated, truncated = after(self, before, u_nominal, u, stats)
         penalty = sum(self.penalties)
         if penalty:

@@ -5,8 +5,8 @@ is at its goal and whom the right-hand rule turns; records the step in the episo
 marks first arrivals; computes the reward terms and which envs terminated; advances the stall
 clock (``rsvo_env.control.stall``). For a scenario with
 the base hooks (``Scenario.at_goal``, ``right_hand_active``, ``reward``) and few agents all of it
-is one compiled call of the same kernels (:func:`fused`), so a small env pays one dispatch
-instead of a dozen; otherwise the hooks are called in turn (:func:`by_hooks`). Both give the
+is one compiled call of the same kernels (:func:`in_one_call`), so a small env pays one dispatch
+instead of a dozen; otherwise the hooks are called in turn (:func:`hook_by_hook`). Both give the
 same numbers, bit for bit (tested).
 """
 
@@ -31,8 +31,8 @@ from rsvo_env.util.planar import within_distance
 _HOOKS = ("at_goal", "right_hand_active", "reward")
 
 
-def fusable(scenario: Scenario, n: int) -> bool:
-    """Whether :func:`fused` serves this scenario: its hooks are the base ones, and N is small
+def one_call_serves(scenario: Scenario, n: int) -> bool:
+    """Whether :func:`in_one_call` serves this scenario: its hooks are the base ones, and N is small
     enough for the dense neighbour search."""
     base = all(getattr(type(scenario), h) is getattr(Scenario, h) for h in _HOOKS)
     return base and scenario.plain and 2 <= n <= sizes.ALL_PAIRS_MAX_AGENTS
@@ -42,7 +42,7 @@ def derive(sim: SimulatorView, envs: NDArray[np.int64] | None = None) -> None:
     """The derived state of the current positions, through the scenario's hooks; with ``envs``
     (the envs a reset moved) only theirs where the hooks are the base ones."""
     s = sim.state
-    part = envs is not None and sim.fused_post_step and len(envs) < len(s.nearest)
+    part = envs is not None and sim.post_step_in_one_call and len(envs) < len(s.nearest)
     pick = envs if part else slice(None)
     x = s.positions[pick]
     d, idx = nearest_neighbors(x, max(sim.k, 1))
@@ -59,7 +59,7 @@ def derive(sim: SimulatorView, envs: NDArray[np.int64] | None = None) -> None:
         s.contact = contact(s.positions, sim.radii, s.obstacles)
 
 
-def by_hooks(
+def hook_by_hook(
     sim: SimulatorView, before: NDArray, requested: NDArray, applied: NDArray, stats: Any
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
     """The after-integration stage through the scenario's hooks: reward (E, N), terminated
@@ -107,7 +107,7 @@ def _episode_end(at_goal, reached, counts, max_steps):
 
 
 @njit(cache=True)
-def _fused(
+def _in_one_call(
     x,
     before,
     goals,
@@ -144,7 +144,7 @@ def _fused(
     terminated,
     truncated,
 ):
-    """:func:`by_hooks` with the base hooks, as one compiled pass of the same kernels, into the
+    """:func:`hook_by_hook` with the base hooks, as one compiled pass of the same kernels, into the
     given outputs (allocated by the caller: arrays a compiled call returns cost more each)."""
     E, n = x.shape[0], x.shape[1]
     dist, idx = knn_dense_arrays(x, max(k, 1))
@@ -198,10 +198,10 @@ def _fused(
     tick_clocks(x, goals, at_goal, margin, best, stalled_steps)
 
 
-def fused(
+def in_one_call(
     sim: SimulatorView, before: NDArray, requested: NDArray, applied: NDArray, stats: Any
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
-    """:func:`by_hooks` in one compiled call (the scenario must be :func:`fusable`)."""
+    """:func:`hook_by_hook` in one compiled call (the scenario must be :func:`one_call_serves`)."""
     s, sc, m = sim.state, sim.scenario, sim.metrics
     feasible, min_h = m.begin(stats)
     p = sc.params
@@ -216,7 +216,7 @@ def fused(
         np.empty(E, dtype=np.bool_),
         np.empty(E, dtype=np.bool_),
     )
-    _fused(
+    _in_one_call(
         np.ascontiguousarray(s.positions),
         np.ascontiguousarray(before),
         np.ascontiguousarray(s.goals),

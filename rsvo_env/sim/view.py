@@ -32,5 +32,5 @@ class SimulatorView(Protocol):
     metrics: EpisodeMetrics
     progress: StallClock  # each agent's progress clock
     deadlock_window: int  # steps without progress that make a deadlock
-    fused_post_step: bool
+    post_step_in_one_call: bool
     warned_options: set[str]  # reset options already warned about, once each

@@ -24,9 +24,7 @@ PARALLEL_MIN_PROBLEMS = 256
 # numba compiles a prange body as a function of its own whose arrays it marks free of aliasing
 # (parfor lowering), and the compiler then keeps the inner loops' values in registers. On one
 # thread a launch costs about 1 us and waits for no other thread, so it cannot stall under
-# load. Measured for the dense filter pass and the CSR solve (benchmarks/speed/kernel_forms.py): the
-# prange form takes 1.35x the serial form's time at 6 agents, 1.10x at 32, 0.61x to 0.99x from
-# 48 on.
+# load. Measured for the dense filter pass and the CSR solve: benchmarks/results/kernel_forms.md.
 PRANGE_FORM_MIN_AGENTS = 64
 
 # Which k-nearest-neighbour kernel serves which batch (measured with benchmarks/speed/knn_speed.py,

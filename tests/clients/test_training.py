@@ -13,7 +13,7 @@ from rsvo_env.cli.main import main as rsvo
 from rsvo_env.sim import observation
 from rsvo_env.training import config as configs
 from rsvo_env.training import evaluate, train
-from rsvo_env.training.evaluation import record_gif, run_episodes, scripted_policy
+from rsvo_env.training.seeded_episodes import record_gif, run_episodes, scripted_policy
 from rsvo_env.wrappers.sb3 import SB3VecEnv
 
 SMALL = [

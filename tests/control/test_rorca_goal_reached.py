@@ -18,7 +18,7 @@ def test_an_agent_that_has_reached_its_goal_yields_as_parked_within_the_goal_rul
     cfg = config.load("crowd")
     for assignment in ("env.nominal=rorca", "env.num_agents=1000", "stall_gate=5"):
         config.set_value(cfg, assignment)
-    # the evaluation's scripted run (rsvo_env.training.evaluation.run_episodes): the config's env
+    # the evaluation's scripted run (training.seeded_episodes.run_episodes): the config's env
     env = config.make_env(cfg, num_envs=1, action="direct", max_steps=1500)
     env.reset(seed=1008)
     for _ in range(1500):

@@ -207,7 +207,7 @@ def test_the_right_hand_rule_with_a_hold_turns_only_agents_stalled_that_long(fus
         max_steps=2000,
         rorca_route=False,
     )
-    env.sim.fused_post_step = fused
+    env.sim.post_step_in_one_call = fused
     env.reset(seed=4)
     sc, s = env.sim.scenario, env.sim.state
     turned = held_back = 0

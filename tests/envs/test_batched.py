@@ -194,8 +194,8 @@ def test_the_fused_after_step_equals_the_hooks_bit_for_bit(name, kwargs):
     runs = []
     for fused in (True, False):
         venv = BatchedEnv(name, num_envs=3, dt=0.1, gamma=10.0, **{"max_steps": 120, **kwargs})
-        assert venv.sim.fused_post_step  # the base hooks: the fused stage serves them
-        venv.sim.fused_post_step = fused
+        assert venv.sim.post_step_in_one_call  # the base hooks: the fused stage serves them
+        venv.sim.post_step_in_one_call = fused
         obs, _ = venv.reset(seed=5)
         rng = np.random.default_rng(1)
         trace, ended = [obs], 0

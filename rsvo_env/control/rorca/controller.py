@@ -9,7 +9,7 @@ from typing import Any
 from numpy.typing import NDArray
 
 from rsvo_env.control.controllers import Controller
-from rsvo_env.control.rorca import route, scripted
+from rsvo_env.control.rorca import fused, route, scripted
 from rsvo_env.control.rorca.scripted import RorcaSettings
 
 # R-ORCA routed around knots, its rules set for crowds of 1,000 and 10,000 (docs/liveness.md,
@@ -45,6 +45,26 @@ class Rorca(Controller):
     def rh_hold(self, settings: RorcaSettings) -> float:
         # routing's last resort waits: the rule turns only agents stalled this long
         return route.RH_HOLD if settings.rorca_route else 0.0
+
+    def nominal(self, state: Any, scenario: Any, right_hand: bool) -> NDArray:
+        # R-ORCA's compiled stage computes the move-to-goal velocities too, where it serves
+        p = scenario.params
+        points, velocities, extra = scenario.model.steered(state, p)
+        turn = state.rh_active if scenario.turns(right_hand) else None
+        one_call = fused.nominal(
+            state,
+            (state.positions, p["k"], turn, p["rh_angle_deg"]),
+            points,
+            velocities,
+            scenario.radii + extra,
+            scenario.controller_settings,
+            p["safety_radius"],
+            p["dt"],
+            scenario.speed,
+        )
+        if one_call is None:
+            return super().nominal(state, scenario, right_hand)
+        return one_call
 
     def steer(self, state: Any, preferred: NDArray, scenario: Any) -> NDArray:
         points, velocities, extra = scenario.model.steered(state, scenario.params)

@@ -25,8 +25,8 @@ from rsvo_env.control.rorca.agent import (
     within,
 )
 from rsvo_env.util import threads
-from rsvo_env.util.borrowed import borrow
 from rsvo_env.util.planar import clip2
+from rsvo_env.util.scratch import borrow
 
 # agents a chunk of the parallel form
 CHUNK = 64
@@ -66,7 +66,7 @@ def _agents(lo, hi, n, x, v, pref, r, W, tied, park, settings, space, out):
     within the cut, those after it, then those before (the order of its pairs), tested without
     a branch (whether one is within the cut is a coin toss in a dense crowd; one not within it
     is written and then overwritten). ``W``: the weight matrices as (E * n, n); ``space`` the
-    rows' and the solver's scratch (``rorca_agent.scratch``), borrowed (``util.borrowed``):
+    rows' and the solver's scratch (``rorca_agent.scratch``), borrowed (``util.scratch``):
     handed down the inlined solve, counted arrays would cost a quarter of the time."""
     K, u_max, tau, dt, cut = settings
     rows, bisectors = borrow(space[0]), borrow(space[1])

@@ -31,9 +31,9 @@ from rsvo_env.control.rorca.agent import (
 )
 from rsvo_env.responsibility.svo import share_of
 from rsvo_env.util import threads
-from rsvo_env.util.borrowed import borrow
 from rsvo_env.util.grid import build_cells, cell_span
 from rsvo_env.util.planar import clip2
+from rsvo_env.util.scratch import borrow
 
 # the list width a call with every neighbour (K < 0) tries first; a crowd denser than that is
 # scanned again with its widest count
@@ -96,7 +96,7 @@ def _list_block(lo, hi, n, data, index, settings, keep, lists, within):
     keeps the nearest by replacing the farthest kept (a scan in space order replaces few); the
     kept are ordered by their rank among the keys, counted without a branch. No helper is
     handed an array: an array handed to a function costs two atomic reference counts
-    (``util.borrowed``)."""
+    (``util.scratch``)."""
     cut, tau = settings[4], settings[2]
     xs, gs, ps, rs, holds = data[0], data[2], data[3], data[4], data[7]
     perm, start, geometry = index
@@ -197,7 +197,7 @@ def _solve_block(lo, hi, n, perm, data, lists, weighting, tied, settings, space,
     symmetric, cosines): the weights ``weight`` (M, K, 2), or with ``cosines``
     ``(1 + weight[..., 0]) / 2`` and 1 minus that (1/2 in the ``symmetric`` (E,) envs), as
     ``responsibility.pair_weights.scored_pairs`` gives them.
-    ``space``: the rows' and the solver's scratch, borrowed (``util.borrowed``)."""
+    ``space``: the rows' and the solver's scratch, borrowed (``util.scratch``)."""
     xs, vs, gs, ps, rs, ths, parks, holds = data
     pref, nbr, count = lists
     weight, symmetric, cosines = weighting
@@ -245,7 +245,7 @@ def _stage(n, motion, theta, rules, W, symmetric, settings, out):
 
 
 @njit(cache=True)
-def _stage_serial(n, motion, theta, rules, W, symmetric, settings, out):
+def stage_serial(n, motion, theta, rules, W, symmetric, settings, out):
     """:func:`_passes` on the calling thread, its chunks one after the other: on one thread
     the faster form (a parallel region costs its launch even on one thread)."""
     _passes(n, motion, theta, rules, W, symmetric, settings, out)
@@ -330,7 +330,7 @@ def stage(
         out,
     )
     if threads.parallel(M):
-        threads.launch(_stage_serial, _stage, M, *args)
+        threads.launch(stage_serial, _stage, M, *args)
     else:  # a parallel region costs its launch even on one thread
-        _stage_serial(*args)
+        stage_serial(*args)
     return out

@@ -34,7 +34,7 @@ TURN_COST = 0.05  # stuck agents a degree of turn is worth
 TURNS = (0.0, -30.0, 30.0, -60.0, 60.0, -90.0, 90.0)  # degrees, counterclockwise positive
 RH_HOLD = 5.0  # s: routed, the right-hand rule turns only agents stalled this long
 # each heading of TURNS as (cos, sin, |degrees|), what every probe reads
-_HEADINGS = (np.cos(np.deg2rad(TURNS)), np.sin(np.deg2rad(TURNS)), np.abs(np.array(TURNS)))
+HEADINGS = (np.cos(np.deg2rad(TURNS)), np.sin(np.deg2rad(TURNS)), np.abs(np.array(TURNS)))
 
 
 def routed(
@@ -61,21 +61,21 @@ def routed(
     E = 1 if x.ndim == 2 else x.shape[0]
     n = x.shape[-2]
     out = pref.reshape(E, n, 2).copy()
-    _route(
+    route_envs(
         x.reshape(E, n, 2),
         v.reshape(E, n, 2),
         g.reshape(E, n, 2),
         np.ascontiguousarray(at_goal, np.bool_).reshape(E, n),
         scale,
         SLOW * speed,
-        *_HEADINGS,
+        *HEADINGS,
         out,
     )
     return out.reshape(shape)
 
 
 @njit(cache=True)
-def _route(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
+def route_envs(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
     """:func:`routed` env by env: the stuck agents in the spatial grid (``util.grid``) of cells
     a probe's diameter wide (a probe's disk touches two per axis, so it visits four; cells of
     its radius, nine to visit), wider where the stuck agents are spread thin (the cells number

@@ -1,9 +1,9 @@
 """The speed of this checkout against another revision (by default the commit before the house
 was rebuilt), in the same run: each case timed in a process of its own for each tree, the trees
 alternating block by block, the ratio of medians reported (this checkout / the other; 1.00 is
-the same speed, above is faster). Written to ``benchmarks/results/house_speed.md``.
+the same speed, above is faster). Written to ``benchmarks/results/revision_speed.md``.
 
-    python -m benchmarks.speed.house_speed [--rev 927dbd7] [--blocks 5] [--seconds 2]
+    python -m benchmarks.speed.revision_speed [--rev 927dbd7] [--blocks 5] [--seconds 2]
 
 The cases are those of ``env_speed.py`` and ``scaling.py`` that the move could touch: the
 filtered ``BatchedEnv`` crowd (16 agents x 256 envs, and 64 x 32), the filtered single env at
@@ -23,7 +23,7 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-OUT = ROOT / "benchmarks" / "results" / "house_speed.md"
+OUT = ROOT / "benchmarks" / "results" / "revision_speed.md"
 
 # each case: agent-steps per second over ``seconds`` after a warm-up, printed as JSON
 CASE = r"""
@@ -137,9 +137,9 @@ def main() -> int:
         ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
     ).stdout.strip()
     lines = [
-        "# The house's speed: this checkout against the library before the move",
+        "# Speed against another revision: this checkout against the library at --rev",
         "",
-        f"`python -m benchmarks.speed.house_speed --rev {args.rev} --blocks {args.blocks} "
+        f"`python -m benchmarks.speed.revision_speed --rev {args.rev} --blocks {args.blocks} "
         f"--seconds {args.seconds}{' --cases ...' if args.cases != CASES else ''}`: `{head}` (now) "
         f"against `{args.rev}`, each case in a process of its own per tree, the trees "
         "alternating block by block, one thread, on this project's 2-core machine (other "

@@ -1,11 +1,11 @@
-"""``rsvo_env.util.borrowed``: a borrowed view is the owner's memory, with its shape, and the
+"""``rsvo_env.util.scratch``: a borrowed view is the owner's memory, with its shape, and the
 compiled stages that borrow their scratch give the velocities the counted arrays gave (the
 R-ORCA tests compare them bit for bit with the pair-by-pair reference)."""
 
 import numpy as np
 from numba import njit
 
-from rsvo_env.util.borrowed import borrow
+from rsvo_env.util.scratch import borrow
 
 
 @njit
