@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.harness import RESULTS
 from rsvo_env.training.config import limit_threads
 from rsvo_env.training.evaluate import load_model
 from rsvo_env.training.seeded_episodes import (
@@ -28,7 +29,6 @@ from rsvo_env.training.seeded_episodes import (
     summarize,
 )
 
-ROOT = Path(__file__).resolve().parents[2]
 EPISODES, SEED = 100, 1000
 GIF = "learned_circular.gif"
 TRAIN = "python -m rsvo_env.training.train"
@@ -157,7 +157,7 @@ def main() -> int:
         "",
         *crowd_section(res, runs),
     ]
-    if (ROOT / "benchmarks" / "results" / GIF).exists():
+    if (RESULTS / GIF).exists():
         lines += [
             f"![the learned residual policy, seed {SEED}]({GIF})",
             "",
@@ -175,10 +175,10 @@ def main() -> int:
         ("training_speed.md", "Throughput: batched env vs single env (SB3)"),
         ("rllib_speed.md", "RLlib sampling throughput vs the env alone"),
     ):
-        path = ROOT / "benchmarks" / "results" / name
+        path = RESULTS / name
         if path.exists():
             lines += [f"## {title}", path.read_text().split("\n", 1)[1]]
-    out = ROOT / "benchmarks" / "results" / "training.md"
+    out = RESULTS / "training.md"
     out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

@@ -16,10 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.harness import alternate, machine
+from benchmarks.harness import ROOT, alternate, machine
 from rsvo_env.filter.safety import FilterConfig, SafetyFilter
-
-ROOT = Path(__file__).resolve().parents[2]
 
 
 def crowd(n: int, seed: int = 0):

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-RESULTS = ROOT / "benchmarks" / "results"
+from benchmarks.harness import RESULTS, ROOT
+
 # name: (envs, agents an env)
 WORKLOADS = {"batched": (256, 16), "crowd": (1, 1000)}
 CORES = os.cpu_count() or 1

@@ -15,18 +15,16 @@ from __future__ import annotations
 
 import argparse
 import time
-from pathlib import Path
 
 import numpy as np
 
-from benchmarks.harness import machine
+from benchmarks.harness import RESULTS, machine
 from rsvo_env.control.nominal import move_to_goal
 from rsvo_env.filter.config import FilterConfig
 from rsvo_env.filter.safety import SafetyFilter
 from rsvo_env.scenarios import Crowd
 from rsvo_env.util import sizes
 
-ROOT = Path(__file__).resolve().parents[2]
 SIZES = (32, 64, 100, 150, 200, 256, 300, 350, 512)
 DT = 0.05
 
@@ -108,7 +106,7 @@ def main() -> None:
             "",
         ]
     )
-    out = ROOT / "benchmarks" / "results" / "dense_filter_speed.md"
+    out = RESULTS / "dense_filter_speed.md"
     out.write_text(text)
     print(f"wrote {out}")
 

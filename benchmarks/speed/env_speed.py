@@ -32,10 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.harness import best_rates, machine
+from benchmarks.harness import RESULTS, ROOT, best_rates, machine
 from rsvo_env.envs.vector import BatchedEnv
 
-ROOT = Path(__file__).resolve().parents[2]
 BATCH_SIZES = ((4, 256), (16, 32), (16, 256), (64, 32))
 # the last commit before the batch-first core: "today" for the single env's speed-up
 # revisions the single env at N = 6 is compared with, and what each was
@@ -158,7 +157,7 @@ def main(argv: list[str] | None = None) -> int:
         default=list(BASELINES),
         help="git revisions whose single env is timed against the same reference ('none': skip)",
     )
-    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "env_speed.md")
+    ap.add_argument("--out", type=Path, default=RESULTS / "env_speed.md")
     args = ap.parse_args(argv)
     try:
         import torch

@@ -18,10 +18,8 @@ import gymnasium
 import numpy as np
 
 import rsvo_env  # noqa: F401  (registers the ids)
-from benchmarks.harness import machine
+from benchmarks.harness import RESULTS, machine
 from rsvo_env.envs.registration import IDS
-
-RESULTS = Path(__file__).resolve().parent / "results"
 
 
 def rates(env_id: str, envs: int, blocks: int, steps: int) -> dict:

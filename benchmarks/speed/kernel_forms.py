@@ -18,18 +18,16 @@ from __future__ import annotations
 import argparse
 import timeit
 from collections.abc import Callable
-from pathlib import Path
 
 import numba
 import numpy as np
 
-from benchmarks.harness import machine
+from benchmarks.harness import RESULTS, machine
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.filter import dense
 from rsvo_env.qp import exact
 from rsvo_env.util import sizes
 
-ROOT = Path(__file__).resolve().parents[2]
 DENSE_SIZES = ((6, 1), (32, 1), (6, 8), (100, 1), (6, 32), (16, 32), (4, 256), (64, 32), (350, 1))
 CSR_SIZES = (100, 1000, 10000)
 
@@ -150,7 +148,7 @@ def main() -> None:
             "",
         ]
     )
-    out = ROOT / "benchmarks" / "results" / "kernel_forms.md"
+    out = RESULTS / "kernel_forms.md"
     out.write_text(text)
     print(f"wrote {out}")
 

@@ -19,14 +19,12 @@ from __future__ import annotations
 
 import argparse
 import time
-from pathlib import Path
 
 import numpy as np
 
-from benchmarks.harness import machine
+from benchmarks.harness import RESULTS, machine
 from rsvo_env.util import neighbors
 
-ROOT = Path(__file__).resolve().parents[2]
 KERNELS = {
     "insertion": neighbors._knn_inserted,
     "ranking": neighbors._knn_ranked,
@@ -102,7 +100,7 @@ def main() -> None:
             "",
         ]
     )
-    out = ROOT / "benchmarks" / "results" / "knn_speed.md"
+    out = RESULTS / "knn_speed.md"
     out.write_text(text)
     print(f"wrote {out}")
 

@@ -20,9 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.harness import machine
+from benchmarks.harness import RESULTS, ROOT, machine
 
-ROOT = Path(__file__).resolve().parents[2]
 CASES = {
     "theta 1..10": {},
     "+ one at 1e-7": {0: 1e-7},
@@ -134,7 +133,7 @@ def step_ratios(n: int, blocks: int = 3, steps: int = 3) -> dict[str, float]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[2000, 4000, 8000, 10000])
-    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "memory.md")
+    ap.add_argument("--out", type=Path, default=RESULTS / "memory.md")
     args = ap.parse_args()
     lines = [
         "# Memory and pairs against the personalities",

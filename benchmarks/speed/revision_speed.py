@@ -22,8 +22,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-OUT = ROOT / "benchmarks" / "results" / "revision_speed.md"
+from benchmarks.harness import RESULTS, ROOT
+
+OUT = RESULTS / "revision_speed.md"
 
 # each case: agent-steps per second over ``seconds`` after a warm-up, printed as JSON
 CASE = r"""

@@ -20,16 +20,13 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-from benchmarks.harness import machine
+from benchmarks.harness import RESULTS, machine
 from rsvo_env.training import config as configs
 from rsvo_env.training.rllib_engine import build
 from rsvo_env.training.rllib_env import RSVOMultiAgentEnv
-
-ROOT = Path(__file__).resolve().parents[2]
 
 
 def env_alone(cfg: dict, env_steps: int) -> float:
@@ -119,7 +116,7 @@ def main() -> int:
         f"PPO with 1 env runner, updates included: {train_rate:,.0f} agent-steps/s.",
         "",
     ]
-    out = ROOT / "benchmarks" / "results" / "rllib_speed.md"
+    out = RESULTS / "rllib_speed.md"
     out.write_text("\n".join(lines))
     print("\n".join(lines))
     return 0

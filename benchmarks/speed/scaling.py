@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.harness import RESULTS
 from benchmarks.reports import scaling_report as report  # noqa: E402
 from rsvo_env.control.nominal import move_to_goal
 from rsvo_env.dynamics import MODELS, double_integrator_step
@@ -43,8 +44,6 @@ from rsvo_env.scenarios import Crowd
 from rsvo_env.util import sizes
 from rsvo_env.util.neighbors import nearest_distance
 
-ROOT = Path(__file__).resolve().parents[2]
-RESULTS = ROOT / "benchmarks" / "results"
 DT = 0.05
 SIZES = (10, 100, 1000, 10_000, 30_000)
 

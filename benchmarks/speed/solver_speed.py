@@ -18,11 +18,9 @@ from pathlib import Path
 import numpy as np
 import qpsolvers
 
-from benchmarks.harness import machine
+from benchmarks.harness import RESULTS, machine
 from rsvo_env.qp import exact, reference
 from tests.support.instances import make_batch, stack
-
-ROOT = Path(__file__).resolve().parents[2]
 
 REFERENCES = ("clarabel", "daqp", "osqp")
 
@@ -62,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--ref-cap", type=int, default=1000)
-    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "solver_speed.md")
+    ap.add_argument("--out", type=Path, default=RESULTS / "solver_speed.md")
     args = ap.parse_args(argv)
     Ks = (1, 5, 20, 100)
     batches = (10, 1000) if args.quick else (10, 1000, 10000)

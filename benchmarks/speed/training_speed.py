@@ -22,19 +22,16 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 from typing import Any
 
 import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import VecMonitor
 
-from benchmarks.harness import machine
+from benchmarks.harness import RESULTS, machine
 from rsvo_env.filter.safety import SafetyFilter
 from rsvo_env.training import config as configs
 from rsvo_env.wrappers.sb3 import SB3VecEnv
-
-ROOT = Path(__file__).resolve().parents[2]
 
 
 def rollout_size(cfg: dict[str, Any]) -> int:
@@ -208,7 +205,7 @@ def main() -> int:
         "",
         *nominal_section(args.updates, args.repeats),
     ]
-    out = ROOT / "benchmarks" / "results" / "training_speed.md"
+    out = RESULTS / "training_speed.md"
     out.write_text("\n".join(lines))
     print("\n".join(lines))
     return 0

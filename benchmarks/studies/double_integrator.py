@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.harness import RESULTS
 from rsvo_env.cli.episode import run
 from rsvo_env.cli.studies.ramp_merge import CASES, first_step, first_through
 from rsvo_env.dynamics import double_integrator_step
@@ -32,9 +33,6 @@ from rsvo_env.filter.safety import FilterConfig, SafetyFilter
 from rsvo_env.util.neighbors import nearest_distance
 from tests.support.backup_states import drive, into_safe_set, safe_crowd, track
 
-ROOT = Path(__file__).resolve().parents[2]
-
-RESULTS = ROOT / "benchmarks" / "results"
 # (N, dt, gamma dt, scale, initial speed)
 SAFETY = [
     (100, 0.01, 1.0, 1e-3, 0.0),

@@ -20,12 +20,12 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.harness import RESULTS
 from benchmarks.reports.liveness_report import MODELS_HEADING, replace_section
 from rsvo_env.dynamics.unicycle import Unicycle
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.scenarios import make_scenario
 
-RESULTS = Path(__file__).resolve().parent / "results"
 HEADING = MODELS_HEADING
 MODELS = ("single_integrator", "double_integrator", "unicycle")
 CROWD = {"dt": 0.05, "gamma": 20.0, "theta_range": (1.0, 10.0)}  # the crowd table's setting

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.harness import RESULTS, ROOT
 from benchmarks.reports.liveness_report import replace_section
 from rsvo_env.envs.vector import BatchedEnv
 from rsvo_env.training.config import limit_threads
@@ -38,8 +39,7 @@ from rsvo_env.training.evaluate import load_model
 from rsvo_env.training.personalities import alternating, evaluate
 from rsvo_env.training.seeded_episodes import run_episodes
 
-ROOT = Path(__file__).resolve().parents[2]
-OUT = ROOT / "benchmarks" / "results"
+OUT = RESULTS
 EPISODES, SEED = 100, 1000
 LEARNED_PREFIX = "## Theta learned online"
 RANDOM_SETS = 200

@@ -5,15 +5,13 @@ python -m benchmarks.studies.reproduce_paper [--quick] [--seed N]
 """
 
 import sys
-from pathlib import Path
 
+from benchmarks.harness import RESULTS, ROOT
 from rsvo_env.cli.reproduce import main
-
-ROOT = Path(__file__).resolve().parents[2]
 
 if __name__ == "__main__":
     args = sys.argv[1:]
-    defaults = ["--out", str(ROOT / "benchmarks" / "results")]
+    defaults = ["--out", str(RESULTS)]
     if "--quick" not in args:
         defaults += ["--readme", str(ROOT / "README.md")]
     sys.exit(main(defaults + args))

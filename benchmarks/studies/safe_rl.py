@@ -31,13 +31,12 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.harness import RESULTS, ROOT
 from rsvo_env.training import config as configs
 from rsvo_env.training.config import limit_threads
 from rsvo_env.training.evaluate import load_model
 from rsvo_env.training.seeded_episodes import run_episodes, scripted_policy, summarize
 
-ROOT = Path(__file__).resolve().parents[2]
-RESULTS = ROOT / "benchmarks" / "results"
 EPISODES, SEED, SEEDS = 100, 1000, (0, 1, 2)
 # the agent-steps of every trained run of a scenario (the same for every method)
 BUDGET = {"circular_swap": 3_000_000, "crowd": 6_000_000}

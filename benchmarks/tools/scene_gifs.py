@@ -7,11 +7,9 @@ yields at the bottleneck. Run from a checkout: ``python -m benchmarks.tools.scen
 
 from __future__ import annotations
 
-from pathlib import Path
-
+from benchmarks.harness import RESULTS
 from rsvo_env.cli.episode import run
 
-ROOT = Path(__file__).resolve().parents[2]
 SCENES = {
     "doorway": [0.5, 4.0, 0.5, 4.0, 4.0, 0.5, 4.0, 0.5],
     "obstacle_field": [0.5, 4.0] * 5,
@@ -20,7 +18,7 @@ SCENES = {
 
 def main() -> None:
     for scenario, theta in SCENES.items():
-        path = ROOT / "benchmarks" / "results" / f"{scenario}.gif"
+        path = RESULTS / f"{scenario}.gif"
         out = run(scenario, theta=theta, gif=path, gif_every=10, render_size=400)
         print(
             f"{scenario}: completed at step {out['completed']}, "

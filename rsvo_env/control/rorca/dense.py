@@ -37,7 +37,7 @@ def _caps(lo, hi, n, motion, rules, tau, cut, pref, park):
     """Agents lo..hi's preferred velocities with the arrival cap into ``pref``
     (``rorca.arrival_capped``), their neighbours within ``cut`` scanned only where the cap can
     apply, and whether each counts as parked into ``park``: ``rules`` (parked, held, tied,
-    reach, goal_held), who counts as parked by ``rorca_agent.counts_parked``.
+    reach, goal_held), who counts as parked by ``agent.counts_parked``.
     Every pass is a function called once a block, its helpers given scalars: an array handed to
     an inlined helper costs two atomic reference counts, as much as an agent's arithmetic."""
     x, g, pref0, r = motion[0], motion[2], motion[3], motion[4]
@@ -66,7 +66,7 @@ def _agents(lo, hi, n, x, v, pref, r, W, tied, park, settings, space, out):
     within the cut, those after it, then those before (the order of its pairs), tested without
     a branch (whether one is within the cut is a coin toss in a dense crowd; one not within it
     is written and then overwritten). ``W``: the weight matrices as (E * n, n); ``space`` the
-    rows' and the solver's scratch (``rorca_agent.scratch``), borrowed (``util.scratch``):
+    rows' and the solver's scratch (``agent.scratch``), borrowed (``util.scratch``):
     handed down the inlined solve, counted arrays would cost a quarter of the time."""
     K, u_max, tau, dt, cut = settings
     rows, bisectors = borrow(space[0]), borrow(space[1])

@@ -66,7 +66,7 @@ def _index(x, n, cut):
 def _gather(perm, motion, theta, parked, held, tied, reach, goal_held):
     """The agents' data in cell order (copies), the order both passes visit and read them in:
     (x, v, goals, preferred, radii, theta, parked, held), who counts as parked by
-    ``rorca_agent.counts_parked``."""
+    ``agent.counts_parked``."""
     x, v, g, pref0, r = motion
     M = perm.shape[0]
     xs, vs, gs, ps = np.empty((M, 2)), np.empty((M, 2)), np.empty((M, 2)), np.empty((M, 2))
@@ -192,7 +192,7 @@ def _weigh_block(lo, hi, n, perm, ths, lists, W, weight):
 @njit(cache=True)
 def _solve_block(lo, hi, n, perm, data, lists, weighting, tied, settings, space, out):
     """Agents lo..hi (cell order): the half-planes of their kept neighbours (``lists``: pref,
-    nbr, count), solved within the speed disk with the sidestep (``rorca_agent.solve``), into
+    nbr, count), solved within the speed disk with the sidestep (``agent.solve``), into
     ``out`` (M, 2) at their own indices, clipped to the speed limit. ``weighting`` (weight,
     symmetric, cosines): the weights ``weight`` (M, K, 2), or with ``cosines``
     ``(1 + weight[..., 0]) / 2`` and 1 minus that (1/2 in the ``symmetric`` (E,) envs), as

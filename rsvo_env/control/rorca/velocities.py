@@ -158,7 +158,7 @@ def goal_blocked(
 
 @njit(cache=True)
 def _blocked_all(x, g, r, held, reach, out):
-    """:func:`goal_blocked` over flat rows, by the stages' own rule (``rorca_agent.blocked``)."""
+    """:func:`goal_blocked` over flat rows, by the stages' own rule (``agent.blocked``)."""
     for a in range(x.shape[0]):
         out[a] = blocked((x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a], held[a], reach)
 
