@@ -26,16 +26,33 @@ __version__ = "1.0.0"
 def parallel_env(
     scenario: str = "circular_swap", safety_filter: bool = True, **kwargs: Any
 ) -> RSVOParallelEnv:
-    """The scenario as a PettingZoo ParallelEnv, every action through the safety filter unless
-    ``safety_filter=False``. ``kwargs``: the filter's (``gamma``, ``solver``, ``barrier``,
-    ``split``, ``neighbor_radius``, ``intervention_penalty``), the env's and the scenario's
-    keywords (:class:`RSVOParallelEnv`)."""
+    """The scenario as a PettingZoo ParallelEnv, every action through the safety filter.
+
+    Args:
+        scenario: A registered scenario's name (``SCENARIOS``).
+        safety_filter: Every action through the R-CBF filter; False: the bare env.
+        **kwargs: The filter's (``gamma``, ``solver``, ``barrier``, ``split``,
+            ``neighbor_radius``, ``intervention_penalty``), the env's and the scenario's
+            keywords ([RSVOParallelEnv][rsvo_env.RSVOParallelEnv]).
+
+    Returns:
+        The env.
+    """
     return RSVOParallelEnv(scenario, safety_filter=safety_filter, **kwargs)
 
 
 def env(scenario: str = "circular_swap", safety_filter: bool = True, **kwargs: Any) -> Any:
-    """The AEC version of :func:`parallel_env` (the same keywords), through PettingZoo's
-    ``parallel_to_aec`` converter (actions checked when they are submitted)."""
+    """The AEC version of [parallel_env][rsvo_env.parallel_env], through PettingZoo's
+    ``parallel_to_aec`` converter (actions checked when they are submitted).
+
+    Args:
+        scenario: A registered scenario's name.
+        safety_filter: Every action through the R-CBF filter; False: the bare env.
+        **kwargs: As [parallel_env][rsvo_env.parallel_env]'s.
+
+    Returns:
+        The AEC env.
+    """
     from rsvo_env.envs.parallel import aec_from_parallel
 
     return aec_from_parallel(parallel_env(scenario, safety_filter, **kwargs))

@@ -6,7 +6,7 @@ from typing import Any
 
 
 def algorithm_class(algo: str) -> Any:
-    """``ppo`` and ``sac``: Stable-Baselines3's; ``ppo_lagrangian``: :class:`PPOLagrangian`."""
+    """``ppo`` and ``sac``: Stable-Baselines3's; ``ppo_lagrangian``: ``PPOLagrangian``."""
     if algo == "ppo_lagrangian":
         from rsvo_env.training.lagrangian import PPOLagrangian
 

@@ -1,9 +1,9 @@
 """Training configs: a YAML file per scenario, CLI overrides, validation, and the envs they make.
 
-A config is a plain dict (``configs/<scenario>.yaml``); :func:`resolve` merges the overrides and
+A config is a plain dict (``configs/<scenario>.yaml``); ``resolve`` merges the overrides and
 checks every field before anything is built, so a bad value fails with its name, not deep inside
 SB3. The resolved config is saved beside the model and is all
-:mod:`rsvo_env.training.evaluate` needs.
+``rsvo_env.training.evaluate`` needs.
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def set_value(cfg: dict[str, Any], assignment: str) -> None:
 
 def resolve(cfg: dict[str, Any], **overrides: Any) -> dict[str, Any]:
     """A checked copy of ``cfg`` with the non-None ``overrides`` (top-level keys) applied:
-    every key and value against :data:`TOP` (:mod:`rsvo_env.training.schema`), then the env
+    every key and value against ``TOP`` (``rsvo_env.training.schema``), then the env
     built once, before anything runs."""
     out = copy.deepcopy(cfg)
     out.update({k: v for k, v in overrides.items() if v is not None})
@@ -163,7 +163,7 @@ def hyperparameters(cfg: dict[str, Any]) -> dict[str, Any]:
 
 def residual_settings(cfg: dict[str, Any]) -> Residual:
     """A config's residual mode (its keywords spelled as ``BatchedEnv``'s), the defaults of
-    :class:`rsvo_env.control.residual.Residual` where it is silent."""
+    ``rsvo_env.control.residual.Residual`` where it is silent."""
     return Residual.of_env_keywords(cfg)
 
 

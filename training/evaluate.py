@@ -99,7 +99,7 @@ def evaluate_loaded(
     gif: str | None = None,
     weighting: str | None = None,
 ) -> dict[str, Any]:
-    """:func:`evaluate` of a policy and config already loaded (:func:`load_model`)."""
+    """``evaluate`` of a policy and config already loaded (``load_model``)."""
     configs.limit_threads(cfg["threads"])
     learned = run_episodes(cfg, policy, episodes, seed, weighting=weighting)
     result: dict[str, Any] = {

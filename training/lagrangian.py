@@ -38,7 +38,7 @@ from rsvo_env.util.validation import shown
 @dataclass
 class Lagrange:
     """The multiplier ``lambda`` of the cost constraint ``J_c <= cost_limit``, by dual ascent:
-    :meth:`update` raises it while the episode cost exceeds the limit and lowers it (to 0 at the
+    ``update`` raises it while the episode cost exceeds the limit and lowers it (to 0 at the
     least) otherwise."""
 
     cost_limit: float
@@ -97,7 +97,7 @@ class CostActorCriticPolicy(ActorCriticPolicy):
 
 
 class PPOLagrangian(PPO):
-    """SB3's PPO with the cost constraint of :class:`Lagrange` (module docstring). ``cost_limit``:
+    """SB3's PPO with the cost constraint of ``Lagrange`` (module docstring). ``cost_limit``:
     the allowed mean episode cost of an agent; ``multiplier_init``, ``multiplier_lr``: the
     multiplier's start and dual step. Logged every update under ``lagrangian/``, and, with
     ``multiplier_log``, appended to that CSV (``timesteps, episode_cost, multiplier``)."""

@@ -1,7 +1,7 @@
 """Fixed personality assignments measured: the scripted controller behind the R-CBF filter, every
 assignment on every seed in one batched env.
 
-The objective of the personality search (:mod:`rsvo_env.training.theta_search`) and the fixed rows
+The objective of the personality search (``rsvo_env.training.theta_search``) and the fixed rows
 of ``benchmarks/studies/personalities.py``. Steps, not seconds: the paper reports its circular game
 in steps of 0.01 s.
 """

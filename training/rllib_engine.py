@@ -4,7 +4,7 @@ SB3 path, PPO with one RLModule shared by every agent.
 ``train_rllib`` builds RLlib's PPO from a resolved config (its ``rllib`` section), on a local Ray
 instance or on a running cluster (``address``), with ``num_env_runners`` sampling processes of
 ``num_envs_per_env_runner`` envs each. Every iteration appends to ``progress.csv`` (and TensorBoard
-when installed); validation runs our own protocol (:mod:`rsvo_env.training.seeded_episodes`) on the
+when installed); validation runs our own protocol (``rsvo_env.training.seeded_episodes``) on the
 shared module; checkpoints are RLlib's (``checkpoint/``, ``best_checkpoint/``,
 ``checkpoints/step_N``), beside the run's ``config.yaml``.
 """
@@ -52,7 +52,7 @@ def module_policy(module: Any) -> Any:
 
 
 def load_module(checkpoint: str | Path) -> Any:
-    """The shared RLModule of an RLlib checkpoint written by :func:`train_rllib`."""
+    """The shared RLModule of an RLlib checkpoint written by ``train_rllib``."""
     from ray.rllib.core.rl_module.rl_module import RLModule
 
     return RLModule.from_checkpoint(

@@ -4,7 +4,7 @@ Built from a training config (the same YAML as the SB3 path: scenario, filter, r
 actions, weighting). It adapts our PettingZoo ParallelEnv directly (no SuperSuit, no RLlib
 PettingZoo wrapper): agents, spaces, the global state (``state()``, ``state_space``), and
 per-agent infos with the filter's signals and the
-running episode's ``episode_*`` values, which :mod:`rsvo_env.training.rllib_engine` turns into
+running episode's ``episode_*`` values, which ``rsvo_env.training.rllib_engine`` turns into
 metrics.
 """
 

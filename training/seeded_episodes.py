@@ -89,7 +89,7 @@ def run_episodes(
     weighting: str | None = None,
 ) -> dict[str, NDArray]:
     """One episode per seed ``seed, ..., seed + episodes - 1``, all stepped together, each
-    capped at :func:`evaluation_cap` steps."""
+    capped at ``evaluation_cap`` steps."""
     cap = evaluation_cap(cfg)
     env = make_env(cfg, num_envs=episodes, action=action, weighting=weighting, max_steps=cap)
     obs, _ = env.reset(seed=seed)
@@ -192,7 +192,7 @@ def record_gif(
 ) -> str:
     """One seeded episode of the filtered ParallelEnv, driven by ``policy``, as a GIF played at
     ``fps`` frames a second (one frame a step: real time when ``fps = 1 / dt``), capped as the
-    evaluation's episodes are (:func:`evaluation_cap`)."""
+    evaluation's episodes are (``evaluation_cap``)."""
     from rsvo_env.envs.rendering import save_gif
 
     cfg = {**cfg, "env": {**cfg["env"], "max_steps": evaluation_cap(cfg)}}
@@ -210,7 +210,7 @@ def record_gif(
 
 
 class _Nominal:
-    """What :func:`scripted_policy` reads, for a ParallelEnv: its nominal actions as an array."""
+    """What ``scripted_policy`` reads, for a ParallelEnv: its nominal actions as an array."""
 
     def __init__(self, env: Any) -> None:
         self.env = env

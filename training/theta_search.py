@@ -7,7 +7,7 @@
 
 A trial is one theta vector (each agent's score log-uniform on [--low, --high]); its objective is
 the mean completion step of the scripted controller behind the R-CBF filter over ``--seeds``, all
-seeds in one batched env (:func:`rsvo_env.training.personalities.evaluate`; an unfinished episode
+seeds in one batched env (``rsvo_env.training.personalities.evaluate``; an unfinished episode
 counts twice the time cap). The circular game runs the paper's controller (``nominal=move_to_goal``)
 unless ``--set nominal=...`` says otherwise. The search starts from the paper's alternating
 assignment and from equal scores, so its answer is never worse than either. Trials run one at a time

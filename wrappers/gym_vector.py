@@ -1,7 +1,7 @@
 """GymnasiumVectorEnv: a ``BatchedEnv`` as a ``gymnasium.vector.VectorEnv``, one slot per agent.
 
 The batched env has an agent axis a ``VectorEnv`` does not (rewards are ``(num_envs,)`` there), so,
-as :class:`rsvo_env.wrappers.sb3.SB3VecEnv` does, every agent of every env is a slot: E x N slots,
+as ``rsvo_env.wrappers.sb3.SB3VecEnv`` does, every agent of every env is a slot: E x N slots,
 slot ``e * N + i`` is agent i of env e, each with one agent's observation and action spaces
 (parameter sharing). All agents of an env end together. The autoreset mode is the batched env's,
 declared in ``metadata["autoreset_mode"]``: ``NEXT_STEP`` (the default here, and what Gymnasium's
@@ -40,12 +40,19 @@ class OverBatched(VectorEnv):
 
 
 class GymnasiumVectorEnv(OverBatched):
-    """``GymnasiumVectorEnv(BatchedEnv(...))``, or ``GymnasiumVectorEnv("crowd", num_envs=4,
-    **kwargs)`` (a ``BatchedEnv`` made with ``autoreset_mode="next_step"`` unless given).
+    """A ``BatchedEnv`` as a Gymnasium ``VectorEnv`` of single agents: E envs of N agents are
+    E N slots, each one agent (the ids' ``vector_entry_point``).
 
-    ``reset(seed=s)`` seeds env e with ``s + e``, through the envs' own generators. Infos hold,
-    per slot, every per-agent signal and its env's ``episode_*`` values, each with the
-    ``_key`` mask Gymnasium's vector infos carry (all True: every slot has every key).
+    Infos hold, per slot, every per-agent signal and its env's ``episode_*`` values, each with
+    the ``_key`` mask Gymnasium's vector infos carry (all True: every slot has every key).
+
+    Args:
+        env: A ``BatchedEnv``, or a scenario's name for a new one.
+        **kwargs: For a new ``BatchedEnv`` (made with ``autoreset_mode="next_step"`` unless
+            given).
+
+    Raises:
+        TypeError: Keywords with a given ``BatchedEnv``.
     """
 
     def __init__(self, env: BatchedEnv | str = "crowd", **kwargs: Any) -> None:
@@ -67,6 +74,18 @@ class GymnasiumVectorEnv(OverBatched):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        """Reset every env.
+
+        Args:
+            seed: Env e is seeded with ``seed + e`` (the slots of an env share its seed).
+            options: ``theta`` and ``weighting``.
+
+        Returns:
+            The slots' observations (E N, D) and their infos.
+
+        Raises:
+            ValueError: A list of seeds (one int or None is taken).
+        """
         if isinstance(seed, (list, tuple)):
             raise ValueError(
                 f"seed = {shown(seed)}: give one int (env e is seeded with seed + e) or None; the "
@@ -78,6 +97,17 @@ class GymnasiumVectorEnv(OverBatched):
     def step(
         self, actions: Any
     ) -> tuple[NDArray, NDArray, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+        """Advance every env one step.
+
+        Args:
+            actions: (E N, 2), one slot's action a row.
+
+        Returns:
+            Observations, rewards, terminated and truncated (each per slot) and the infos.
+
+        Raises:
+            ValueError: Actions of the wrong shape.
+        """
         a = np.asarray(actions)
         if a.shape != self.action_space.shape:
             raise ValueError(f"actions has shape {a.shape}, expected {self.action_space.shape}")

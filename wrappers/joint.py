@@ -20,10 +20,19 @@ from rsvo_env.util.validation import shown
 
 
 class JointControlEnv(gymnasium.Env):
-    """Action: ``Box(-1, 1, (A N,))``, agent i's action at ``[A i, A i + A)`` (A = 2, or 3 with
-    ``theta_action=True``). Observation: the
-    agents' observations concatenated in ``possible_agents`` order. ``parallel`` is the
-    (filtered) PettingZoo ParallelEnv it drives."""
+    """The whole team as one Gymnasium ``Env`` (the ids ``rsvo/<Scenario>-v0``): one joint
+    action, one observation, the team's reward.
+
+    Action: ``Box(-1, 1, (A N,))``, agent i's action at ``[A i, A i + A)`` (A = 2, or 3 with
+    ``theta_action=True``). Observation: the agents' observations concatenated in
+    ``possible_agents`` order. ``parallel`` is the PettingZoo ParallelEnv it drives.
+
+    Args:
+        scenario: A registered scenario's name.
+        safety_filter: Every action through the R-CBF filter; False: the bare env.
+        render_mode: ``"human"``, ``"rgb_array"`` or None.
+        **kwargs: Every keyword of [RSVOParallelEnv][rsvo_env.RSVOParallelEnv].
+    """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 50}
 
@@ -54,7 +63,20 @@ class JointControlEnv(gymnasium.Env):
     def _flat(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         return np.concatenate([obs[a] for a in self.agent_names]).astype(np.float32)
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
+    def reset(
+        self, *, seed: int | None = None, options: dict | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode.
+
+        Args:
+            seed: Seeds the env's generators; None: an episode seed drawn from Gymnasium's own
+                seeded generator.
+            options: ``theta`` and ``weighting`` for this episode.
+
+        Returns:
+            The joint observation and the info (each per-agent signal as an array in agent
+            order, ``cost`` summed, ``min_distance`` the least).
+        """
         super().reset(seed=seed)
         if seed is None and not hasattr(self, "_seeded"):
             # draw the episode seeds from gymnasium's own seeded generator, never a global one
@@ -76,7 +98,20 @@ class JointControlEnv(gymnasium.Env):
         info["min_distance"] = float(info["min_distance"].min())
         return info
 
-    def step(self, action: Any):
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Advance every agent one step.
+
+        Args:
+            action: The joint action (A N,).
+
+        Returns:
+            The joint observation, the team's reward (the agents' sum), terminated (every agent
+            done), truncated and the info.
+
+        Raises:
+            ValueError: A joint action of the wrong shape, or an agent's action not finite
+                (naming the agent).
+        """
         a = np.asarray(action, dtype=np.float64)
         if a.shape != self.action_space.shape:
             raise ValueError(
@@ -104,7 +139,9 @@ class JointControlEnv(gymnasium.Env):
         return np.concatenate([nominal[a] for a in self.agent_names]).astype(np.float32)
 
     def render(self):
+        """Draw the current step (an RGB frame in ``"rgb_array"`` mode, else None)."""
         return self.parallel.render()
 
     def close(self) -> None:
+        """Close the renderer's window, if any."""
         self.parallel.close()

@@ -2,7 +2,7 @@
 core, what ``gymnasium.make_vec(id, E, vectorization_mode="vector_entry_point")`` returns.
 
 Each slot is the env ``gymnasium.make(id)`` makes
-(:class:`rsvo_env.wrappers.joint.JointControlEnv`): the same observation and action spaces (every
+(``rsvo_env.wrappers.joint.JointControlEnv``): the same observation and action spaces (every
 agent's, concatenated in agent order), the reward summed over the agents, terminated when every
 agent is at its goal, truncated at the step cap. The infos hold what the joint env's info holds, one
 row per slot: every per-agent signal (E, N, ...), ``cost`` summed and ``min_distance`` the smallest
@@ -25,10 +25,20 @@ from rsvo_env.wrappers.gym_vector import MODES, OverBatched
 
 
 class JointVectorEnv(OverBatched):
-    """``JointVectorEnv("crowd", num_envs=64, **kwargs)``: ``kwargs`` are ``BatchedEnv``'s (every
-    keyword of the scenario and the filter; ``safety_filter=False`` turns the filter off), the
-    autoreset mode ``"next_step"`` (Gymnasium's default) unless given. ``reset(seed=s)`` seeds
-    env e with ``s + e``, as a ``SyncVectorEnv`` of ``gymnasium.make(id)`` envs would."""
+    """E envs of the joint (whole-team) env as one Gymnasium ``VectorEnv``: each env a slot,
+    its joint action and observation, as a ``SyncVectorEnv`` of ``gymnasium.make(id)`` envs
+    would give them.
+
+    Args:
+        scenario: A registered scenario's name.
+        num_envs: How many envs.
+        **kwargs: ``BatchedEnv``'s (every keyword of the scenario and the filter;
+            ``safety_filter=False`` turns the filter off), the autoreset mode ``"next_step"``
+            (Gymnasium's default) unless given.
+
+    Raises:
+        ValueError: A ``render_mode`` (a batch is not drawn), or a bad value.
+    """
 
     def __init__(self, scenario: str = "crowd", num_envs: int = 1, **kwargs: Any) -> None:
         render_mode = kwargs.pop("render_mode", None)
@@ -55,12 +65,33 @@ class JointVectorEnv(OverBatched):
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        """Reset every env.
+
+        Args:
+            seed: Env e is seeded with ``seed + e``, or ``seed[e]`` of a list.
+            options: ``theta`` and ``weighting``.
+
+        Returns:
+            The joint observations (E, N D) and the infos.
+        """
         obs, info = self.env.reset(seed=seed, options=options)
         return self._joint(obs), self._infos(info)
 
     def step(
         self, actions: Any
     ) -> tuple[NDArray, NDArray, NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
+        """Advance every env one step.
+
+        Args:
+            actions: (E, A N), one joint action an env.
+
+        Returns:
+            Observations, the teams' rewards, terminated and truncated (each per env) and the
+            infos.
+
+        Raises:
+            ValueError: Actions of the wrong shape.
+        """
         a = np.asarray(actions)
         if a.shape != self.action_space.shape:
             raise ValueError(

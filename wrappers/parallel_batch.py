@@ -1,6 +1,6 @@
 """ParallelBatch: one PettingZoo ParallelEnv of ours seen as a batch of one env (E = 1).
 
-It gives :class:`rsvo_env.wrappers.sb3.SB3VecEnv` (and anything else written against
+It gives ``rsvo_env.wrappers.sb3.SB3VecEnv`` (and anything else written against
 ``rsvo_env.envs.vector.BatchedEnv``) the same arrays from a single, possibly wrapped, ParallelEnv:
 ``(1, N, ...)`` observations, rewards and signals, ``(1,)`` episode flags, ``final_obs`` and
 per-episode auto-reset. This is the single-env path the batched core is measured against.

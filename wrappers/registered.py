@@ -26,7 +26,7 @@ def _scenario(id_scenario: str, kwargs: dict[str, Any]) -> str:
 
 
 def joint_env(id_scenario: str, **kwargs: Any) -> JointControlEnv:
-    """gymnasium's entry point: :class:`rsvo_env.wrappers.joint.JointControlEnv` of the id's
+    """gymnasium's entry point: ``rsvo_env.wrappers.joint.JointControlEnv`` of the id's
     scenario."""
     return JointControlEnv(_scenario(id_scenario, kwargs), **kwargs)
 
@@ -35,7 +35,7 @@ def joint_vector_env(
     id_scenario: str, num_envs: int = 1, max_episode_steps: int | None = None, **kwargs: Any
 ) -> JointVectorEnv:
     """gymnasium's vector entry point (``make_vec(id, E, vectorization_mode=
-    "vector_entry_point")``): :class:`rsvo_env.wrappers.joint_vector.JointVectorEnv` of the id's
+    "vector_entry_point")``): ``rsvo_env.wrappers.joint_vector.JointVectorEnv`` of the id's
     scenario, E envs of the batched core; the spec's ``max_episode_steps`` is the step cap
     unless ``max_steps`` is given."""
     if max_episode_steps is not None and "max_cycles" not in kwargs:
@@ -44,10 +44,11 @@ def joint_vector_env(
 
 
 def parallel_env(id_scenario: str, **kwargs: Any) -> RSVOParallelEnv:
-    """PettingZoo's parallel entry point: :func:`rsvo_env.parallel_env` of the id's scenario."""
+    """PettingZoo's parallel entry point: [`parallel_env`][rsvo_env.parallel_env] of the id's
+    scenario."""
     return rsvo_env.parallel_env(_scenario(id_scenario, kwargs), **kwargs)
 
 
 def aec_env(id_scenario: str, **kwargs: Any) -> Any:
-    """PettingZoo's AEC entry point: :func:`rsvo_env.env` of the id's scenario."""
+    """PettingZoo's AEC entry point: [`env`][rsvo_env.env] of the id's scenario."""
     return rsvo_env.env(_scenario(id_scenario, kwargs), **kwargs)

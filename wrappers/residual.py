@@ -24,15 +24,25 @@ from rsvo_env.control.residual import Residual
 
 
 class ResidualAction(BaseParallelWrapper):
-    """``gate_radius``: distance to the goal (physical units) under which the residual is
-    ignored; ``residual_right_hand``: whether the scripted command includes the right-hand rule;
-    ``residual_scale``: the residual's largest norm in speed limits (2 lets it reverse a full-speed
-    command, 1 only turn it); ``yield_radius``: with it, a parked agent's residual acts again
-    while a neighbour still en route is closer than this (physical units), so it may step aside;
-    ``interaction_radius``: with it, the residual of an agent en route acts only while another
-    agent is closer than this; ``stall_gate``: with it, the residual of an agent that has come no
-    closer to its goal for this many seconds is ignored until it does again
-    (:class:`rsvo_env.control.residual.Residual`)."""
+    """Residual actions: each agent's action is added to the scripted nominal command (the
+    scenario's controller), for every model, within each agent's own limit.
+
+    Args:
+        env: The PettingZoo env (an ``RSVOParallelEnv`` or a wrapper of one).
+        gate_radius: Distance to the goal (physical units) under which the residual is ignored.
+        residual_right_hand: Whether the scripted command includes the right-hand rule.
+        residual_scale: The residual's largest norm in speed limits (2 lets it reverse a
+            full-speed command, 1 only turn it).
+        yield_radius: With it, a parked agent's residual acts again while a neighbour still en
+            route is closer than this (physical units), so it may step aside.
+        interaction_radius: With it, the residual of an agent en route acts only while another
+            agent is closer than this.
+        stall_gate: With it, the residual of an agent that has come no closer to its goal for
+            this many seconds is ignored until it does again.
+
+    Raises:
+        ValueError: A bad value, naming the field and the value.
+    """
 
     def __init__(
         self,

@@ -24,13 +24,24 @@ from rsvo_env.filter.safety import SafetyFilter
 
 
 class RCBFSafetyFilter(BaseParallelWrapper):
-    """The paper's decentralized R-CBF filter in front of an ``RSVOParallelEnv``.
+    """A filter stage of the paper's decentralized R-CBF filter in front of an
+    ``RSVOParallelEnv`` (a bare one, ``safety_filter=False``, or one filtered already).
 
-    ``gamma``, ``barrier`` and ``split`` default to the scenario's values; ``solver`` is
-    ``"exact"`` or any qpsolvers name. ``intervention_penalty`` c subtracts
-    ``c |u_safe - u_nominal|^2`` (physical units) from each agent's reward. Stacked filters all
-    act, the outermost first; a filter stacked on an identical one changes nothing (the safe
-    control is already feasible for the same QP).
+    Stacked filters all act, the outermost first; a filter stacked on an identical one changes
+    nothing (the safe control is already feasible for the same QP).
+
+    Args:
+        env: The PettingZoo env (an ``RSVOParallelEnv`` or a wrapper of one).
+        gamma: The class-K gain; None: the scenario's.
+        solver: ``"exact"`` or an installed qpsolvers backend.
+        intervention_penalty: ``c``: ``c |u_safe - u_nominal|^2`` (physical units) is
+            subtracted from each agent's reward.
+        barrier: The double integrator's barrier; None: the scenario's.
+        split: How the split barriers share a pair's row; None: the scenario's.
+        neighbor_radius: The pairs examined lie within it; None: every pair that can bind.
+
+    Raises:
+        ValueError: A bad value, naming the field and the value.
     """
 
     def __init__(

@@ -26,11 +26,17 @@ SLOT_SIGNALS = ("intervention", "cost", "feasible")
 
 
 class SB3VecEnv(VecEnv):
-    """``venv``: the batched env, whose ``num_envs * num_agents`` agents are the slots, or one
-    PettingZoo ParallelEnv of ours (seen through :class:`ParallelBatch`: N slots).
+    """Stable-Baselines3's ``VecEnv`` over our envs: each agent a slot, so one shared policy
+    acts for every agent (parameter sharing).
 
-    ``seed(s)`` (what ``PPO(..., seed=s)`` calls) seeds the next reset: env e with ``s + e``,
-    through the env's own generators, never numpy's global one.
+    Args:
+        venv: A ``BatchedEnv`` (made with ``autoreset_mode="same_step"``, the default), whose
+            ``num_envs * num_agents`` agents are the slots, or one PettingZoo ParallelEnv of
+            ours (N slots).
+
+    Raises:
+        ValueError: A ``BatchedEnv`` that resets on the next step (SB3 reads the last
+            observation of an episode from the step that ends it).
     """
 
     def __init__(self, venv: Any) -> None:
@@ -55,23 +61,49 @@ class SB3VecEnv(VecEnv):
 
     # ---- the VecEnv contract ----------------------------------------------------------------
     def seed(self, seed: int | None = None) -> Sequence[int | None]:
+        """Seed the next reset (what ``PPO(..., seed=s)`` calls): env e with ``seed + e``, through
+        the env's own generators, never numpy's global one.
+
+        Args:
+            seed: The first env's seed; None: unseeded.
+
+        Returns:
+            Each slot's seed (the slots of an env share it).
+        """
         self._seed = seed
         n = self.agents_per_env
         self._seeds = [None if seed is None else seed + k // n for k in range(self.num_envs)]
         return self._seeds
 
     def reset(self) -> NDArray[np.float32]:
+        """Reset every env (seeded by ``seed`` once); ``reset_infos`` holds the infos.
+
+        Returns:
+            The slots' observations (E N, D).
+        """
         obs, info = self.venv.reset(seed=self._seed, options=self._options[0] or None)
         self._seed = None
         self.reset_infos = self._infos(info, np.zeros(self.venv.num_envs, dtype=bool))
         return obs.reshape(self.num_envs, -1)
 
     def step_async(self, actions: NDArray) -> None:
+        """Keep the slots' actions for ``step_wait``.
+
+        Args:
+            actions: (E N, 2), one slot's action a row.
+        """
         self._actions = np.asarray(actions).reshape(
             self.venv.num_envs, self.agents_per_env, *(self.action_space.shape or ())
         )
 
     def step_wait(self) -> tuple[NDArray, NDArray, NDArray, list[dict]]:
+        """Step every env with the kept actions; an env that ends is reset on the same step.
+
+        Returns:
+            Observations, rewards (float32) and dones per slot, and one info dict a slot (its
+            filter signals; its env's ``episode_*`` values, ``terminal_observation`` and
+            ``TimeLimit.truncated`` where the episode ended).
+        """
         obs, reward, terminated, truncated, info = self.venv.step(self._actions)
         n = self.agents_per_env
         dones = np.repeat(terminated | truncated, n)
@@ -98,20 +130,56 @@ class SB3VecEnv(VecEnv):
         return infos
 
     def close(self) -> None:
+        """Close the env."""
         self.venv.close()
 
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
-        """The batched env's attribute, once per selected slot (they share one env)."""
+        """The batched env's attribute, once per selected slot (they share one env).
+
+        Args:
+            attr_name: The attribute's name.
+            indices: The slots (an int, a list, or None: all).
+
+        Returns:
+            The value, once per slot.
+        """
         return [getattr(self.venv, attr_name)] * len(self._indices(indices))
 
     def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
+        """Set the batched env's attribute (shared by every slot).
+
+        Args:
+            attr_name: The attribute's name.
+            value: Its new value.
+            indices: Accepted for SB3's contract; the slots share one env.
+        """
         setattr(self.venv, attr_name, value)
 
     def env_method(self, method_name: str, *args: Any, indices: Any = None, **kwargs: Any) -> list:
+        """Call the batched env's method once.
+
+        Args:
+            method_name: The method's name.
+            *args: Its arguments.
+            indices: The slots the result is repeated for (None: all).
+            **kwargs: Its keyword arguments.
+
+        Returns:
+            The result, once per slot.
+        """
         result = getattr(self.venv, method_name)(*args, **kwargs)
         return [result] * len(self._indices(indices))
 
     def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
+        """Whether the slots' env is wrapped by ``wrapper_class``: never (it is ours).
+
+        Args:
+            wrapper_class: A Gymnasium wrapper class.
+            indices: The slots (None: all).
+
+        Returns:
+            False, once per slot.
+        """
         return [False] * len(self._indices(indices))
 
     def _indices(self, indices: Any) -> Sequence[int]:

@@ -1,6 +1,6 @@
 """Scripted controllers by name: the registry (``docs/architecture.md``). A scenario's
-``nominal`` names one; a new controller is one module with a subclass of :class:`Controller`
-plus one line below (or a call of :func:`register`)."""
+``nominal`` names one; a new controller is one module with a subclass of ``Controller``
+plus one line below (or a call of ``register``)."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ __all__ = ["CONTROLLERS", "Controller", "get", "names", "register", "settings"]
 
 
 def register(controller: Controller) -> Controller:
-    """Add ``controller`` (an instance of a :class:`Controller` subclass) under its ``name``; a
+    """Add ``controller`` (an instance of a ``Controller`` subclass) under its ``name``; a
     name taken by another controller, or a setting another controller owns, raises."""
     if not isinstance(controller, Controller) or not controller.name:
         raise TypeError(f"register takes a Controller with a name, got {shown(controller)}")

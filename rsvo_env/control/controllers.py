@@ -1,6 +1,6 @@
 """The scripted-controller interface (``docs/architecture.md``): what a scenario asks of the
 controller its ``nominal`` names. A new controller is one module with a subclass of
-:class:`Controller` plus one line in the registry (``rsvo_env.control``)."""
+``Controller`` plus one line in the registry (``rsvo_env.control``)."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ class Controller:
     ``settings``: its settings' defaults, each a scenario keyword it owns (the scenario keeps
     their values in its ``params`` and the controller's record of them in
     ``Scenario.controller_settings``); ``positive`` and ``nonnegative`` name those that must be
-    > 0 and >= 0. ``reads``: the fields of the core's state :meth:`steer` reads.
+    > 0 and >= 0. ``reads``: the fields of the core's state ``steer`` reads.
     """
 
     name: ClassVar[str] = ""
@@ -44,7 +44,7 @@ class Controller:
         return 0.0
 
     def nominal(self, state: Any, scenario: Any, right_hand: bool) -> NDArray:
-        """The velocities (E, N, 2) the agents ask: :meth:`steer` of the ``scenario``'s
+        """The velocities (E, N, 2) the agents ask: ``steer`` of the ``scenario``'s
         move-to-goal velocities (turned by the right-hand rule unless ``right_hand`` is False).
         A controller whose compiled stage computes those too overrides it."""
         preferred = scenario.move_to_goal(state, right_hand, scenario.speed)

@@ -20,8 +20,8 @@ from rsvo_env.util.planar import as_rows, clip2, clip_norm, norm
 
 @njit(cache=True)
 def move_to_goal_into(x, g, k, limit, turn, c, s, out):
-    """:func:`move_to_goal` on flat rows (M, 2) into ``out``: ``turn`` (M,) the rows the
-    right-hand rule turns by the rotation ``c``, ``s`` (:func:`clockwise`)."""
+    """``move_to_goal`` on flat rows (M, 2) into ``out``: ``turn`` (M,) the rows the
+    right-hand rule turns by the rotation ``c``, ``s`` (``clockwise``)."""
     for i in range(x.shape[0]):
         ux, uy = clip2(-k * (x[i, 0] - g[i, 0]), -k * (x[i, 1] - g[i, 1]), limit)
         if turn[i]:

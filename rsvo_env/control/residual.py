@@ -67,7 +67,7 @@ class Residual:
                 object.__setattr__(self, name, check_positive(getattr(self, name), name))
 
     def env_keywords(self) -> dict[str, Any]:
-        """These settings as the keywords of ``BatchedEnv`` (:data:`ENV_KEYWORDS`)."""
+        """These settings as the keywords of ``BatchedEnv`` (``ENV_KEYWORDS``)."""
         return {kw: getattr(self, name) for kw, name in ENV_KEYWORDS.items()}
 
     @classmethod
@@ -103,7 +103,7 @@ class Residual:
         return opened.reshape(en_route.shape)
 
     def acting(self, scenario: Any, state: Any) -> NDArray[np.bool_]:
-        """(E, N): whose residual acts this step, :meth:`open` and, with ``stall_gate``, not
+        """(E, N): whose residual acts this step, ``open`` and, with ``stall_gate``, not
         stalled for that long."""
         on = self.open(state.positions, state.goals)
         if self.stall_gate is not None:

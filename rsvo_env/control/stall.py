@@ -94,7 +94,7 @@ class StallClock:
 def tick_clocks(x, goals, at_goal, margin, best, steps):
     """In place: an agent that came ``margin`` closer than its best (or is at its goal) starts
     its clock again from its new best; every other agent's clock advances. The distance is
-    :func:`goal_distance`'s arithmetic, computed here: one call a step, not three."""
+    ``goal_distance``'s arithmetic, computed here: one call a step, not three."""
     E, n = at_goal.shape
     for e in range(E):
         for i in range(n):

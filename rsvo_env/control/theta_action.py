@@ -41,10 +41,10 @@ class ThetaAction:
         return np.exp(lo + t * (hi - lo))
 
     def step_theta(self, a: NDArray, current: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The scores (...) of a step's action components (...): :meth:`theta`, except that a
+        """The scores (...) of a step's action components (...): ``theta``, except that a
         component equal, at the action space's float32 resolution, to the one the current score
         maps to keeps that score (clipped to the range) exactly. An action in float32 cannot
-        name a score more finely, and this is what :meth:`action` promises the scripted
+        name a score more finely, and this is what ``action`` promises the scripted
         controller: its component keeps each agent's theta, with no drift of a rounding."""
         keep = np.float32(a) == self.action(current).astype(np.float32)
         kept = np.clip(current, self.theta_min, self.theta_max)
@@ -52,7 +52,7 @@ class ThetaAction:
 
     def action(self, theta: NDArray[np.float64]) -> NDArray[np.float64]:
         """The action components (...) that give the scores ``theta`` (...), clipped to the
-        range: the inverse of :meth:`theta`. A zero range maps to 0."""
+        range: the inverse of ``theta``. A zero range maps to 0."""
         lo, hi = np.log(self.theta_min), np.log(self.theta_max)
         if hi == lo:
             return np.zeros(np.shape(theta))
@@ -62,7 +62,7 @@ class ThetaAction:
 
 def theta_action_of(enabled: Any, theta_range: Any, theta_max: float) -> ThetaAction | None:
     """The map for keywords ``theta_action`` (a flag) and ``theta_action_range`` ((low, high),
-    0 < low <= high <= the scenario's ``theta_max``; None: :data:`DEFAULT_RANGE`), checked."""
+    0 < low <= high <= the scenario's ``theta_max``; None: ``DEFAULT_RANGE``), checked."""
     if not check_flag(enabled, "theta_action"):
         if theta_range is not None:
             raise TypeError("theta_action_range needs theta_action=True")

@@ -4,7 +4,7 @@ observation and the scenarios call, so that none of them compares a model's name
 A model owns its state update (the exact zero-order-hold step), the name of its input bound
 (speed or acceleration), its barrier rows and the radius beyond which none of them can bind
 (exact culling), the checks its input box must pass, and the velocity bound its episodes reach.
-A new model is one module with a subclass of :class:`Dynamics` plus one line in the registry
+A new model is one module with a subclass of ``Dynamics`` plus one line in the registry
 (``rsvo_env/dynamics/__init__.py``).
 """
 
@@ -39,7 +39,7 @@ class Dynamics:
     # (rsvo_env.filter.projection_disk)
     nominal_disk: ClassVar[bool] = False
     # whether one radius from the smallest weight alone bounds every binding pair
-    # (:meth:`search_radius`); else the state decides it (:meth:`culling_radii`)
+    # (``search_radius``); else the state decides it (``culling_radii``)
     radius_from_weights: ClassVar[bool] = False
     # whether its agents may each have their own body radius (rsvo_env.geometry.bodies), and box
     per_agent_bodies: ClassVar[bool] = False
@@ -77,7 +77,7 @@ class Dynamics:
     def track(
         self, state: Any, velocity: NDArray, params: dict[str, Any], limits: NDArray | None
     ) -> NDArray[np.float64]:
-        """The inputs (E, N, 2) that give the steered points (:meth:`steered`) the
+        """The inputs (E, N, 2) that give the steered points (``steered``) the
         ``velocity`` (E, N, 2) a scripted controller asks, within the input bound (``limits``
         (N,) each agent's own, or None: the scene's)."""
         raise NotImplementedError
@@ -104,7 +104,7 @@ class Dynamics:
 
     def advance_state(self, state: Any, u: NDArray, dt: float, params: dict[str, Any]) -> None:
         """The simulator's step of ``state`` (the core's State: positions, velocities and the
-        model's :attr:`state_fields`) under the inputs ``u`` for ``dt``."""
+        model's ``state_fields``) under the inputs ``u`` for ``dt``."""
         state.positions, state.velocities = self.step(state.positions, state.velocities, u, dt)
 
     def to_controls(
@@ -127,11 +127,11 @@ class Dynamics:
         planar: Callable[[NDArray], NDArray],
         limits: NDArray | None,
     ) -> NDArray:
-        """The inverse of :meth:`to_controls` (no clipping)."""
+        """The inverse of ``to_controls`` (no clipping)."""
         return planar(controls)
 
     def hold(self, controls: NDArray, params: dict[str, Any], limits: NDArray | None) -> NDArray:
-        """Inputs (..., N, 2) held to each agent's bound, as :meth:`to_controls` holds an action
+        """Inputs (..., N, 2) held to each agent's bound, as ``to_controls`` holds an action
         (a residual's sum with the scripted command goes through it): the norm clipped to the
         scenario's limit, or to each agent's ``limits`` (N,)."""
         if limits is None:
@@ -148,9 +148,9 @@ class Dynamics:
         state: dict[str, Any],
     ) -> tuple[Bodies | None, dict[str, NDArray]]:
         """The model's own inputs to ``SafetyFilter.filter`` (``state``: its keywords named by
-        :attr:`state_fields`, and ``holonomic``), checked, each naming the field and the agent;
+        ``state_fields``, and ``holonomic``), checked, each naming the field and the agent;
         returns the bodies (changed where the model's inputs change them) and the arrays for
-        :meth:`lift`."""
+        ``lift``."""
         if state.get("holonomic") is not None:
             raise ValueError(f"holonomic is for the unicycle's mixed crowds, not the {self.name}")
         return bodies, {}
@@ -169,7 +169,7 @@ class Dynamics:
         return positions, nominal, bodies, None
 
     def turn_rows(self, rows: Rows, rotation: NDArray | None) -> Rows:
-        """The rows in the QP's coordinates (:meth:`lift`'s rotation)."""
+        """The rows in the QP's coordinates (``lift``'s rotation)."""
         return rows
 
     def global_fields(self) -> tuple[tuple[str, float, float], ...]:
@@ -181,7 +181,7 @@ class Dynamics:
         return []
 
     def lower(self, cfg: FilterSettings, actions: NDArray, bodies: Bodies) -> NDArray:
-        """The QP's solution back in the model's inputs (inverse of :meth:`lift`'s nominal)."""
+        """The QP's solution back in the model's inputs (inverse of ``lift``'s nominal)."""
         return actions
 
     def rows(

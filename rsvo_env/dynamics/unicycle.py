@@ -95,7 +95,7 @@ class Unicycle(Dynamics):
         return q, state.steered_velocities, np.asarray(l)
 
     def track(self, state, velocity, params, limits):
-        """The look-ahead velocity ``c`` as (v, w) (:meth:`toward`); where ``c`` points behind
+        """The look-ahead velocity ``c`` as (v, w) (``toward``); where ``c`` points behind
         the robot, it turns in place toward it at ``|c| / l`` (at most ``w_max``): the inverse
         map would ask to reverse. ``v`` within [0, u_max], ``w`` within the turn-rate bound.
 
@@ -143,7 +143,7 @@ class Unicycle(Dynamics):
 
     def agent_boxes(self, cfg, u_max):
         """Each agent's body-frame box from its own forward-speed limit ``v_max,i``:
-        ``0 <= v <= sqrt(v_max,i^2 - (l w_max)^2)``, ``|l w| <= l w_max`` (:meth:`box`)."""
+        ``0 <= v <= sqrt(v_max,i^2 - (l w_max)^2)``, ``|l w| <= l w_max`` (``box``)."""
         assert cfg.lookahead is not None and cfg.w_max is not None  # the unicycle's config
         b = cfg.lookahead * cfg.w_max
         slow = u_max <= b
@@ -232,14 +232,14 @@ class Unicycle(Dynamics):
         return np.stack([a[..., 0] * _v_max(params, limits), a[..., 1] * params["w_max"]], -1)
 
     def to_actions(self, controls, params, planar, limits):
-        """The inverse of :meth:`to_controls` (no clipping)."""
+        """The inverse of ``to_controls`` (no clipping)."""
         return np.stack(
             [controls[..., 0] / _v_max(params, limits), controls[..., 1] / params["w_max"]], -1
         )
 
     def hold(self, controls, params, limits):
         """(v, w) held to ``|v| <= v_max`` (each agent's own) and ``|w| <= w_max``, the range of
-        :meth:`to_controls`."""
+        ``to_controls``."""
         v_max, w_max = _v_max(params, limits), params["w_max"]
         return np.stack(
             [np.clip(controls[..., 0], -v_max, v_max), np.clip(controls[..., 1], -w_max, w_max)], -1

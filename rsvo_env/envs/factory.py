@@ -53,8 +53,8 @@ def make_simulator(
 ) -> Simulator:
     """The core for a scenario (name or instance), behind the safety filter unless
     ``safety_filter=False``: the one safety default of every entry point, since both adapters
-    are built through here. ``kwargs`` holds the filter's keywords (:data:`FILTER_KEYWORDS`),
-    the simulator's (:data:`SIM_KEYWORDS`) and the scenario's parameters; ``max_cycles`` is
+    are built through here. ``kwargs`` holds the filter's keywords (``FILTER_KEYWORDS``),
+    the simulator's (``SIM_KEYWORDS``) and the scenario's parameters; ``max_cycles`` is
     PettingZoo's name for ``max_steps``."""
     safety_filter = check_flag(safety_filter, "safety_filter")
     filter_kwargs = route(safety_filter, kwargs)

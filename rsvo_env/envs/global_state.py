@@ -49,7 +49,7 @@ def space(sim: Simulator) -> gymnasium.spaces.Box:
 
 
 def values(sim: Simulator, envs: NDArray[np.int64] | None = None) -> NDArray[np.float32]:
-    """The states (E, S) float32 of ``envs`` (all by default), laid out as :func:`space`."""
+    """The states (E, S) float32 of ``envs`` (all by default), laid out as ``space``."""
     s = sim.state
     sel = slice(None) if envs is None else np.asarray(envs)
     pos, vel, goals = s.positions[sel], s.velocities[sel], s.goals[sel]

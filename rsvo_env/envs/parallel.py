@@ -1,9 +1,9 @@
 """RSVOParallelEnv: the paper's scenarios as a PettingZoo ParallelEnv, the E = 1 dict adapter
-over the simulation core (:class:`rsvo_env.sim.core.Simulator`).
+over the simulation core (``rsvo_env.sim.core.Simulator``).
 
 Every action goes through the safety filter (a stage of the core's step) unless
 ``safety_filter=False``; ``rsvo_env.wrappers.RCBFSafetyFilter`` adds a filter stage to an env
-(:meth:`RSVOParallelEnv.add_safety_filter`).
+(``RSVOParallelEnv.add_safety_filter``).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from rsvo_env.util.validation import (
 
 
 class EpisodeView:
-    """The running episode of env e of an :class:`EpisodeMetrics`: ``steps``,
+    """The running episode of env e of an ``EpisodeMetrics``: ``steps``,
     ``deadlock_onset``, ``completed``, ... as plain values (None for an event not yet seen)."""
 
     def __init__(self, metrics: EpisodeMetrics, e: int = 0) -> None:
@@ -58,15 +58,37 @@ class EpisodeView:
 
 
 class RSVOParallelEnv(ParallelEnv):
-    """N agents of one scenario; all stay alive until the episode ends for all together.
+    """N agents of one scenario, a PettingZoo ``ParallelEnv``; all stay alive until the episode
+    ends for all together.
 
     Actions: ``Box(-1, 1, (2,))`` per agent; the env clips each action's norm to 1 and scales it
     by the scenario's ``u_max`` (velocity) or ``a_max`` (acceleration). Observations: float32,
     ``5 + 10 K`` values (``6 + 10 K`` with ``stall_clock``; ``rsvo_env.sim.observation``).
-    ``frame="goal"`` rotates observed vectors and actions into each agent's own start-to-goal
-    frame. ``max_cycles`` is PettingZoo's name for ``max_steps``. Per-agent infos have the same
-    keys, types and shapes at reset and at every step (``docs/api.md``); the last finished
-    episode's metrics are :attr:`episode_metrics`.
+    Per-agent infos have the same keys, types and shapes at reset and at every step
+    ([the core and its adapters](api.md)); the last finished episode's metrics are
+    ``episode_metrics``.
+
+    Args:
+        scenario: A registered scenario's name (``rsvo_env.SCENARIOS``) or a ``Scenario``.
+        render_mode: ``"human"``, ``"rgb_array"`` or None.
+        render_size: The rendered frame's side, in pixels.
+        keep_history: Keep every step's positions in ``history`` (the whole trajectory); by
+            default only the last steps the renderer draws, so memory does not grow with the
+            episode.
+        record_series: Keep the per-step series the paper plots (each step's smallest and mean
+            nearest distance in ``episode_metrics``); off by default, for the same reason.
+        safety_filter: Every action through the R-CBF filter; False: the bare env, the action
+            applied as given.
+        **kwargs: The filter's ``gamma``, ``solver``, ``barrier``, ``split``,
+            ``neighbor_radius``, ``intervention_penalty``; the env's ``num_obs_neighbors``,
+            ``frame`` (``"goal"``: observed vectors and actions in each agent's start-to-goal
+            frame), ``weighting``, ``reward_progress``, ``reward_time``, ``reward_goal``,
+            ``reward_team``, ``stall_clock``, ``max_cycles`` (PettingZoo's name for
+            ``max_steps``); and every scenario parameter.
+
+    Raises:
+        TypeError: An unknown keyword (naming it and the known ones).
+        ValueError: A bad value, naming the field and the value.
     """
 
     metadata: dict[str, Any] = {
@@ -86,17 +108,6 @@ class RSVOParallelEnv(ParallelEnv):
         safety_filter: bool = True,
         **kwargs: Any,
     ) -> None:
-        """``keep_history``: keep every step's positions in ``history`` (the whole trajectory);
-        by default only the last ``TRAIL`` steps the renderer draws, so memory does not grow with
-        the episode. ``record_series``: keep the per-step series the paper plots (each step's
-        smallest and mean nearest distance, ``min_distance_series`` and
-        ``avg_min_distance_series`` of :attr:`episode_metrics`); off by default, for the same
-        reason. ``safety_filter``: every action through the R-CBF filter (False: the bare
-        env, the nominal applied as given). ``kwargs``: the filter's ``gamma``, ``solver``,
-        ``barrier``, ``split``, ``neighbor_radius``, ``intervention_penalty``;
-        ``num_obs_neighbors``, ``frame``, ``weighting``,
-        ``reward_progress``, ``reward_time``, ``reward_goal``, ``reward_team``, ``stall_clock``,
-        ``max_cycles``, and every scenario parameter."""
         keep_history = check_flag(keep_history, "keep_history")
         record_series = check_flag(record_series, "record_series")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -121,6 +132,7 @@ class RSVOParallelEnv(ParallelEnv):
         self.history: deque[NDArray[np.float64]] = deque(maxlen=None if keep_history else TRAIL)
         self.renderer: Renderer | None = None
         self.episode_metrics: dict[str, Any] | None = None
+        """The last finished episode's metrics (``docs/metrics.md``), None before one ends."""
         self._started = False
         self._info_keys: tuple[tuple[str, ...], tuple[str, ...]] | None = None
 
@@ -170,15 +182,45 @@ class RSVOParallelEnv(ParallelEnv):
         return global_state.values(self.sim)[0]
 
     def observation_space(self, agent: str) -> gymnasium.spaces.Box:
+        """An agent's observation space.
+
+        Args:
+            agent: The agent's name (``"agent_0"``, ...).
+
+        Returns:
+            ``Box`` of float32, the same for every agent.
+        """
         return self.observation_spaces[agent]
 
     def action_space(self, agent: str) -> gymnasium.spaces.Box:
+        """An agent's action space.
+
+        Args:
+            agent: The agent's name.
+
+        Returns:
+            ``Box(-1, 1, (2,))`` (with theta actions, one component more).
+        """
         return self.action_spaces[agent]
 
     # ---- episode -----------------------------------------------------------------------------
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, NDArray[np.float32]], dict[str, dict[str, Any]]]:
+        """Start an episode.
+
+        Args:
+            seed: Seeds the env's own generators (starts, goals, theta draws); None: continue
+                from the current ones.
+            options: ``theta`` (the scores, one per agent) and ``weighting`` for this episode;
+                other keys are not read (a warning says so once).
+
+        Returns:
+            Each agent's observation and info.
+
+        Raises:
+            ValueError: Bad options, naming the field and the value; the env is left as it was.
+        """
         # Options are checked before any draw, so a refused reset leaves the generator as it was.
         seed = check_seed(seed)
         theta, weighting = self.sim.check_options(options)
@@ -200,6 +242,19 @@ class RSVOParallelEnv(ParallelEnv):
             raise RuntimeError("the episode is over; call reset()")
 
     def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
+        """Advance every agent one step, through the filter where it is on.
+
+        Args:
+            actions: Each live agent's action, in ``[-1, 1]`` per component.
+
+        Returns:
+            Observations, rewards, terminations, truncations and infos, each by agent.
+
+        Raises:
+            ValueError: A missing, unknown or malformed action (naming the agent and the
+                value); the env is left as it was.
+            RuntimeError: The episode has ended or not begun.
+        """
         self._require_running()
         a = check_action_dict(actions, self.agents, (self.sim.action_width,))
         obs, reward, terminated, truncated, signals = self.sim.step(a[None])
@@ -244,7 +299,15 @@ class RSVOParallelEnv(ParallelEnv):
         return self.sim.nominal_controls()[0]
 
     def nominal_actions(self) -> dict[str, NDArray[np.float32]]:
-        """The scripted move-to-goal (+ right-hand rule, or lane following) as env actions."""
+        """The scripted controller's actions for the current step (the scenario's ``nominal``:
+        move-to-goal and the right-hand rule, R-ORCA, or lane following).
+
+        Returns:
+            Each agent's action, as ``step`` takes it.
+
+        Raises:
+            RuntimeError: Before ``reset``.
+        """
         if not self._started:
             raise RuntimeError("call reset() first")
         a = self.sim.nominal_actions()[0].astype(np.float32)
@@ -260,6 +323,12 @@ class RSVOParallelEnv(ParallelEnv):
 
     # ---- rendering ---------------------------------------------------------------------------
     def render(self) -> NDArray[np.uint8] | None:
+        """Draw the current step.
+
+        Returns:
+            An RGB frame (H, W, 3) in ``"rgb_array"`` mode; None in ``"human"`` mode (a
+            window) or without a render mode.
+        """
         if self.render_mode is None:
             gymnasium.logger.warn("render() called without a render_mode")
             return None
@@ -305,6 +374,7 @@ class RSVOParallelEnv(ParallelEnv):
         )
 
     def close(self) -> None:
+        """Close the renderer's window, if any."""
         if self.renderer is not None:
             self.renderer.close()
             self.renderer = None

@@ -202,7 +202,7 @@ def _capsule_patch(ax: Any, cap: NDArray) -> None:
 
 
 def marker_handles(mark_labels: Sequence[str] = ()) -> list[Any]:
-    """Legend entries that explain :func:`plot_trajectories`' markers."""
+    """Legend entries that explain ``plot_trajectories``' markers."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -240,7 +240,7 @@ def plot_trajectories(
     final position (a disc of radius R/2 with the agent's number in it) and its goal (cross).
     ``marks`` are steps at which the agents are also drawn (faded discs), named by
     ``mark_labels`` in the legend (e.g. deadlock onset, resolution). ``legend="agents"`` keeps
-    only the agents' entries (for panels that share :func:`marker_handles` in one figure legend).
+    only the agents' entries (for panels that share ``marker_handles`` in one figure legend).
     ``obstacles`` (O, 5): capsules, drawn grey at their true size. Equal scores have no colour
     scale to show: the bar is left out and the legend names the one theta.
     """

@@ -1,6 +1,6 @@
 """BatchedEnv: E envs x N agents of one scenario as arrays, the batched adapter over the core.
 
-One :class:`rsvo_env.sim.core.Simulator` steps every env in one array program, the safety filter a
+One ``rsvo_env.sim.core.Simulator`` steps every env in one array program, the safety filter a
 stage of its step. Env e of ``reset(seed=s)`` is seeded with ``s + e`` and equals, bit for bit,
 an ``RSVOParallelEnv`` reset with seed ``s + e`` (and reset without a seed after each episode).
 """
@@ -36,7 +36,7 @@ class BatchedEnv:
     ``step(actions (E, N, 2)) -> (obs, reward (E, N), terminated (E,), truncated (E,), info)``.
     Actions are normalised as in the ParallelEnv (norm clipped to 1, scaled by the speed
     limit); with ``theta_action=True`` they are (E, N, 3), the last component each agent's
-    theta for the step (:mod:`rsvo_env.control.theta_action`). ``info`` is a dict of arrays, the
+    theta for the step (``rsvo_env.control.theta_action``). ``info`` is a dict of arrays, the
     same
     keys at every step (with theta actions, ``theta`` (E, N) too):
 
@@ -57,14 +57,36 @@ class BatchedEnv:
     and ``episode_*`` values of the new episode; ``obs`` of the ending step is the last one, and
     there is no ``final_obs``. An env's episodes are the same in both modes.
 
-    ``action="residual"`` adds each action to the scripted nominal command (``gate_radius``,
-    ``residual_right_hand``, ``residual_scale``, ``yield_radius``, ``interaction_radius``,
-    ``stall_gate``: see :class:`rsvo_env.control.residual.Residual`).
-
     Reset options (``theta``, (N,) or (E, N), and ``weighting``) hold for the auto-resets that
-    follow, until the next ``reset``. Every keyword of ``RSVOParallelEnv`` and of the scenario
-    works here; ``safety_filter=False`` turns the filter off, and ``gamma``, ``solver``,
-    ``intervention_penalty``, ``barrier``, ``split``, ``neighbor_radius`` set it.
+    follow, until the next ``reset``.
+
+    Args:
+        scenario: A registered scenario's name or a ``Scenario``.
+        num_envs: How many envs (E), >= 1.
+        safety_filter: Every action through the R-CBF filter; False: the bare envs.
+        action: ``"direct"`` (the action is the command) or ``"residual"`` (added to the
+            scripted nominal command).
+        gate_radius: Residual mode: within this distance of its goal an agent is parked, and
+            its residual acts only to yield (>= 0).
+        residual_right_hand: Residual mode: the scripted command under the residual includes
+            the right-hand rule.
+        residual_scale: Residual mode: the residual's largest norm in speed limits (> 0; 1 lets
+            it turn a full-speed command by up to 90 degrees, 2 also reverse it).
+        yield_radius: Residual mode: a parked agent's residual acts while another agent is
+            closer than this; None: never.
+        interaction_radius: Residual mode: an en-route agent's residual acts only while another
+            agent is closer than this; None: always.
+        stall_gate: Residual mode: the residual of an agent that has come no closer to its goal
+            for this long (s) is ignored until it does again; None: never ignored.
+        autoreset_mode: ``"same_step"`` or ``"next_step"`` (above).
+        **kwargs: Every keyword of [RSVOParallelEnv][rsvo_env.RSVOParallelEnv] (the filter's
+            ``gamma``, ``solver``, ``intervention_penalty``, ``barrier``, ``split``,
+            ``neighbor_radius``; ``num_obs_neighbors``, ``frame``, ``weighting``,
+            ``reward_*``, ``max_cycles``, ``theta_action``) and of the scenario.
+
+    Raises:
+        TypeError: An unknown keyword.
+        ValueError: A bad value, naming the field and the value.
     """
 
     render_mode = None  # a batch is not drawn; one env is (``RSVOParallelEnv``)
@@ -84,9 +106,6 @@ class BatchedEnv:
         autoreset_mode: str = "same_step",
         **kwargs: Any,
     ) -> None:
-        """``kwargs``: the filter's ``gamma``, ``solver``, ``barrier``, ``split``,
-        ``neighbor_radius``; ``num_obs_neighbors``, ``frame``, ``weighting``, ``reward_*``,
-        ``max_cycles``; and every scenario parameter."""
         if action not in ("direct", "residual"):
             raise ValueError(f"action = {shown(action)}; use 'direct' or 'residual'")
         if autoreset_mode not in AUTORESET_MODES:
@@ -136,8 +155,21 @@ class BatchedEnv:
         seed: int | Sequence[int | None] | None = None,
         options: dict[str, Any] | None = None,
     ) -> tuple[NDArray[np.float32], dict[str, NDArray]]:
-        """Reset every env; env e is seeded with ``seed + e`` (all unseeded: seed None), or, as
-        Gymnasium's vector envs take it, with ``seed[e]`` of a list of one seed (or None) an env."""
+        """Reset every env.
+
+        Args:
+            seed: Env e is seeded with ``seed + e`` (all unseeded: None), or, as Gymnasium's
+                vector envs take it, with ``seed[e]`` of a list of one seed (or None) an env.
+            options: ``theta`` ((N,) or (E, N)) and ``weighting``, held for the auto-resets
+                that follow until the next ``reset``.
+
+        Returns:
+            The observations (E, N, D) float32 and the info dict of arrays.
+
+        Raises:
+            ValueError: Bad seeds or options, naming the field and the value; the envs are
+                left as they were.
+        """
         if isinstance(seed, (list, tuple)):
             if len(seed) != self.num_envs:
                 raise ValueError(f"seed has {len(seed)} entries, expected {self.num_envs}")
@@ -155,6 +187,19 @@ class BatchedEnv:
     def step(
         self, actions: Any
     ) -> tuple[NDArray[np.float32], NDArray, NDArray[np.bool_], NDArray[np.bool_], dict]:
+        """Advance every env one step; an env whose episode ends is reset (``autoreset_mode``).
+
+        Args:
+            actions: (E, N, 2) in ``[-1, 1]`` per component ((E, N, 3) with theta actions).
+
+        Returns:
+            Observations (E, N, D), rewards (E, N), terminated (E,), truncated (E,) and the
+            info dict of arrays.
+
+        Raises:
+            ValueError: Malformed actions, naming the env, the agent and the value.
+            RuntimeError: Before ``reset``.
+        """
         if self._reset_args is None:
             raise RuntimeError("call reset() before step()")
         a = check_vectors(
@@ -217,7 +262,11 @@ class BatchedEnv:
         return self.sim.nominal_actions().astype(np.float32)
 
     def set_weighting(self, mode: Weighting) -> None:
-        """Weighting of the running and all later episodes."""
+        """Set the weighting of the running and all later episodes.
+
+        Args:
+            mode: ``"asymmetric"``, ``"symmetric"`` or a callable ``theta -> W``.
+        """
         self.sim.set_weighting(None, mode)
         self.sim.weighting = mode
         if self._reset_args is not None:

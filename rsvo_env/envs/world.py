@@ -22,7 +22,7 @@ class World:
     parameters (``safety_radius``, ``u_max``, ``dt``, ``dynamics``, ``gamma``, ...).
 
     The views follow the simulator: they always show the current step. Change theta or the
-    weighting through :meth:`set_theta` and :meth:`set_weighting`, which go through the core.
+    weighting through ``set_theta`` and ``set_weighting``, which go through the core.
     """
 
     def __init__(self, sim: Simulator, e: int = 0) -> None:

@@ -31,14 +31,33 @@ def _box_bound(value: ArrayLike, name: str) -> NDArray[np.float64]:
 
 @dataclass(frozen=True)
 class FilterConfig:
-    """Validated parameters of the filter; a bad field raises ``ValueError`` naming it.
+    """The filter's parameters, validated once: a bad field raises ``ValueError`` naming it.
 
-    ``u_max`` / ``u_min`` bound each input component (velocity for the single integrator,
-    acceleration for the double integrator); ``u_min`` defaults to ``-u_max``. ``gamma`` is the
-    class-K gain of eq. ``cbf``; with ``dt`` given, ``gamma * dt <= 1`` is required, the bound
-    under which the Euler step keeps ``h+ >= (1 - gamma dt) h >= 0`` (``docs/math.md``).
-    ``neighbor_radius`` limits the pairs examined; below the computed sensing radius the
-    guarantee is lost and a warning says so.
+    Attributes:
+        gamma: The class-K gain of eq. ``cbf`` (> 0); with ``dt`` given, ``gamma * dt <= 1``
+            is required, the bound under which the step keeps ``h+ >= (1 - gamma dt) h``.
+        safety_radius: The distance two identical bodies keep, centre to centre (> 0); bodies
+            of their own radii keep ``r_i + r_j``.
+        u_max: Each input component's upper bound (velocity for the single integrator and the
+            unicycle, acceleration for the double integrator): one number or one per
+            component.
+        u_min: Each component's lower bound; None: ``-u_max``.
+        dt: The sampling step (s) under which the guarantee holds exactly; None: continuous
+            time.
+        dynamics: The model, by name (``"single_integrator"``, ``"double_integrator"``,
+            ``"unicycle"``) or an instance of ``rsvo_env.dynamics.Dynamics``.
+        weighting: ``"asymmetric"`` (R-SVO), ``"symmetric"`` (1/2 each) or a callable
+            ``theta -> W`` (see [weight_matrix][rsvo_env.weight_matrix]).
+        solver: ``"exact"`` (the compiled 2-D projection) or an installed qpsolvers backend.
+        barrier: The double integrator's barrier, a name in the barrier registry
+            (``"segment"``, the default; ``"backup"``, ``"braking"``, ``"hocbf"``).
+        split: How the split barriers share a pair's row (``"capability"``, ``"sign_aware"``,
+            ``"paper"``).
+        gamma2: The HOCBF's second gain; None: ``gamma``.
+        neighbor_radius: The pairs examined lie within it; None: every pair that can bind.
+            Below the computed sensing radius the guarantee is lost and a warning says so.
+        lookahead: The unicycle's look-ahead distance; None: the model's default.
+        w_max: The unicycle's turn-rate bound; None: the model's default.
     """
 
     gamma: float = 12.0

@@ -98,7 +98,7 @@ Outputs = tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]
 
 
 def _outputs(E: int, n: int) -> Outputs:
-    """The arrays :func:`_serial` and :func:`_parallel` fill: allocated here, as a compiled
+    """The arrays ``_serial`` and ``_parallel`` fill: allocated here, as a compiled
     function's returned arrays cost more each to hand back to Python (measured at 6 agents)."""
     return (
         np.empty((E, n, 2)),

@@ -1,4 +1,4 @@
-"""The checks of :meth:`rsvo_env.filter.safety.SafetyFilter.filter` beyond positions and scores:
+"""The checks of ``rsvo_env.filter.safety.SafetyFilter.filter`` beyond positions and scores:
 per-agent bodies and obstacles (a model's own inputs, such as headings, its model checks).
 Each raises ``ValueError`` naming the field, the agent and the value."""
 
@@ -19,7 +19,7 @@ def check_bodies(
     radii: ArrayLike | None,
     u_max: ArrayLike | None,
 ) -> Bodies | None:
-    """The checked per-agent radii and limits of :meth:`filter` (None: the config's)."""
+    """The checked per-agent radii and limits of ``filter`` (None: the config's)."""
     if radii is None and u_max is None:
         return None
     if not cfg.model.per_agent_bodies:

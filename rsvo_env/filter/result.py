@@ -1,4 +1,4 @@
-"""What the filter decided (:class:`FilterResult`), and the stats of stacked filters."""
+"""What the filter decided (``FilterResult``), and the stats of stacked filters."""
 
 from __future__ import annotations
 
@@ -17,12 +17,25 @@ class FilterResult:
     """What the filter decided for each agent (the ``certify_action`` contract: action + flag).
 
     Per-agent arrays have the input's leading shape, (N, ...) or (E, N, ...); per-scene values
-    (``min_h``, ``n_unrecoverable_pairs``, ``n_capped_shares``) are scalars for one scene and (E,)
-    arrays for a batch. ``feasible[i]`` is False when agent i's QP had no solution; its action is
-    then the one that minimises the largest normalised violation, never the nominal, and
-    ``max_violation[i]`` says by how much (metres of half-plane offset, 0 when feasible).
-    :attr:`rows` are every agent's rows; the compiled all-pairs pass keeps none, and builds
-    them on first access (the general path on the same inputs: the same rows).
+    are scalars for one scene and (E,) arrays for a batch. ``rows`` are every agent's rows; the
+    compiled all-pairs pass keeps none, and builds them on first access (the general path on
+    the same inputs: the same rows).
+
+    Attributes:
+        actions: The certified actions, in the model's inputs.
+        feasible: False where an agent's QP had no solution; its action is then the one that
+            minimises the largest normalised violation, never the nominal.
+        intervention: ``|u - u_nominal|`` of each agent.
+        active: How many of each agent's rows bind at its action.
+        min_h: The scene's smallest barrier value over its pairs and obstacles.
+        max_violation: How far each agent's action breaks its rows (in the units of a
+            half-plane's offset; 0 where feasible).
+        n_rows: How many rows each agent's QP had.
+        n_unrecoverable_pairs: Pairs of the double integrator's split barriers that no action
+            in the boxes can recover, per scene.
+        n_capped_shares: Pairs whose share the capability split capped, per scene.
+        kept_rows: The rows, where the path that solved kept them.
+        rows_later: What builds the rows on first access, where none were kept.
     """
 
     actions: NDArray[np.float64]

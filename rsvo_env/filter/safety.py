@@ -4,7 +4,7 @@
 (``responsibility``) and solves every agent's QP (paper, eq. ``qp`` and Algorithm 1) in one batch
 (``solvers``). It works on arrays in physical units, so any simulator can call it: one scene of
 N agents, (N, 2), or E independent scenes at once, (E, N, 2), pairs never crossing scenes. The
-simulation core calls :meth:`SafetyFilter.apply`, the same computation without the input checks,
+simulation core calls ``SafetyFilter.apply``, the same computation without the input checks,
 as the stage of its step right before integration.
 """
 
@@ -46,9 +46,9 @@ from rsvo_env.util.validation import check_theta, check_vectors, real_array
 
 
 class KnownScenes(NamedTuple):
-    """What a caller of :meth:`SafetyFilter.apply` already knows of its scenes: each scene's
+    """What a caller of ``SafetyFilter.apply`` already knows of its scenes: each scene's
     smallest weight ``omega_min`` (E,), each agent's nearest distance ``nearest`` (E, N), and
-    ``floor``, :func:`pair_weights.weight_floor` of the weights."""
+    ``floor``, ``pair_weights.weight_floor`` of the weights."""
 
     omega_min: NDArray[np.float64] | None = None
     nearest: NDArray[np.float64] | None = None
@@ -56,7 +56,19 @@ class KnownScenes(NamedTuple):
 
 
 class SafetyFilter:
-    """The decentralized responsibility-associated CBF filter (paper, Algorithm 1), batched."""
+    """The decentralized responsibility-associated CBF filter (paper, Algorithm 1), batched:
+    each agent's nominal action projected through its own QP, ``min |u - u_nominal|^2`` within
+    its input box and one barrier row per neighbour (and obstacle), ``A_i u <= omega_i b_i``.
+
+    Args:
+        config: The filter's parameters; None: ``FilterConfig(**kwargs)``.
+        **kwargs: [FilterConfig][rsvo_env.FilterConfig]'s fields, where no ``config`` is
+            given.
+
+    Raises:
+        TypeError: Both a config and keywords are given.
+        ValueError: A bad field (naming it and its value).
+    """
 
     def __init__(self, config: FilterConfig | None = None, **kwargs: object) -> None:
         if config is not None and kwargs:
@@ -81,7 +93,17 @@ class SafetyFilter:
         bodies: Bodies | None = None,
     ) -> float:
         """Radius of the pair search: the sensing radius (single integrator) or the user's.
-        ``omega_min``: each scene's smallest weight, when the caller keeps it."""
+
+        Args:
+            theta: The scores, (N,) or (E, N).
+            omega: The weight matrices, (N, N) or (E, N, N), or None (from ``theta``).
+            omega_min: Each scene's smallest weight, where the caller keeps it.
+            bodies: Each agent's radius and box; None: the config's.
+
+        Returns:
+            The distance beyond which no pair's row can bind (inf for the models whose radius
+            comes from the state), or ``neighbor_radius`` where configured.
+        """
         cfg = self.config
         if not cfg.model.radius_from_weights:  # the state decides: no radius of the weights
             return cfg.neighbor_radius if cfg.neighbor_radius is not None else float("inf")
@@ -114,10 +136,19 @@ class SafetyFilter:
         J: NDArray,
         weighting: Sequence[Weighting] | None = None,
     ) -> NDArray[np.float64]:
-        """(P, 2) weights of each pair (flat agent indices): omega_IJ and omega_JI (Thm. 1),
-        summing to 1. ``theta`` is (N,) or (E, N), ``omega`` (N, N) or (E, N, N);
-        ``weighting``: each env's named weighting, for scores without a matrix (else the
-        configured one)."""
+        """The weights of each pair (Thm. 1): ``omega_IJ`` and ``omega_JI``, summing to 1.
+
+        Args:
+            theta: The scores, (N,) or (E, N).
+            omega: The weight matrices, (N, N) or (E, N, N), or None (from ``theta``).
+            I: The pairs' first agents (P,), flat indices ``e * N + i``.
+            J: Their second agents (P,).
+            weighting: Each env's named weighting, for scores without a matrix; None: the
+                configured one.
+
+        Returns:
+            (P, 2) each pair's two weights.
+        """
         mode = self.config.weighting
         n = theta.shape[-1]
         if omega is None and weighting is not None:
@@ -145,18 +176,31 @@ class SafetyFilter:
     ) -> FilterResult:
         """Safe actions (paper, eq. ``qp`` per agent) for one scene or a batch of scenes.
 
-        positions, nominal, velocities: (N, 2) or (E, N, 2) in physical units; theta: (N,) or
-        (E, N) personality scores; omega: optional weight matrix, (N, N) or (E, N, N), that
-        replaces the configured weighting (validated on every call); radii: optional body
-        radii, (N,) or (E, N), a pair safe at ``r_i + r_j`` (default: ``safety_radius / 2``
-        each); u_max: optional per-agent input bound, (N,) or (E, N), the box
-        ``[-u_max_i, u_max_i]`` per component (default: the config's box); obstacles: static
-        circles and walls (:class:`rsvo_env.geometry.obstacles.Obstacles`), one row each, weight 1;
-        headings: (N,) or (E, N) radians, for the unicycle (nominal and actions are then
-        (v, w), ``docs/unicycle.md``); holonomic: (N,) or (E, N) bools, for the unicycle: the
-        agents that are single integrators in a mixed crowd (their nominal and action a world
-        velocity, each component within ``u_max``). Bad input raises ``ValueError`` naming
-        field, agent and value.
+        Args:
+            positions: (N, 2) or (E, N, 2), in physical units.
+            nominal: The nominal actions, the shape of ``positions`` (the unicycle's: (v, w)).
+            theta: The personality scores, (N,) or (E, N), >= 0.
+            velocities: The velocities, the shape of ``positions`` (the double integrator
+                needs them).
+            omega: A weight matrix, (N, N) or (E, N, N), in place of the configured weighting
+                (validated on every call).
+            radii: Body radii, (N,) or (E, N): a pair is safe at ``r_i + r_j``; None:
+                ``safety_radius / 2`` each.
+            u_max: Each agent's input bound, (N,) or (E, N): the box ``[-u_max_i, u_max_i]``
+                per component; None: the config's box.
+            obstacles: Static circles and walls ([Obstacles][rsvo_env.Obstacles]), one row each,
+                weight 1.
+            headings: (N,) or (E, N) radians, for the unicycle (its nominal and actions are
+                then (v, w), ``docs/unicycle.md``).
+            holonomic: (N,) or (E, N) bools, for the unicycle: the agents that are single
+                integrators in a mixed crowd (their nominal and action a world velocity, each
+                component within ``u_max``).
+
+        Returns:
+            The actions and what the filter decided ([FilterResult][rsvo_env.FilterResult]).
+
+        Raises:
+            ValueError: Bad input, naming the field, the agent and the value.
         """
         cfg = self.config
         pos = check_vectors(positions, "positions", lead=None)
@@ -221,18 +265,33 @@ class SafetyFilter:
         obstacles: NDArray | None = None,
         headings: NDArray | None = None,
     ) -> FilterResult:
-        """:meth:`filter` on (E, N, ...) arrays that are already valid: the core's filter stage.
+        """[filter][rsvo_env.SafetyFilter.filter] on (E, N, ...) arrays that are already valid:
+        the simulation core's filter stage.
 
         One call of the row builder and one of the solver serve all E x N agents. Dense
-        single-integrator scenes with the exact solver take one compiled pass (``solvers.dense``,
-        the same arithmetic) unless ``with_rows`` asks for the rows. A caller that keeps them passes
-        them as ``known`` (:class:`KnownScenes`), which the large-N path needs. There, each agent
-        examines its neighbours within its own radius (:func:`pairs.agent_radii`, or the model's
-        ``culling_radii`` from the current velocities): exact culling, so the rows kept, and the
-        solution, are those of all pairs. ``bodies``: each agent's radius and box (None: the
-        config's); ``obstacles``: capsules (O, 5) or (E, O, 5)
-        (:class:`rsvo_env.geometry.obstacles.Obstacles`); the model's own state (its
-        ``state_fields``: the unicycle's ``headings`` (E, N)).
+        single-integrator scenes with the exact solver take one compiled pass (the same
+        arithmetic) unless ``with_rows`` asks for the rows. Larger scenes examine, for each
+        agent, its neighbours within its own radius (``pairs.agent_radii``, or the model's
+        ``culling_radii`` from the current velocities): exact culling, so the rows kept, and
+        the solution, are those of all pairs.
+
+        Args:
+            positions: (E, N, 2).
+            nominal: (E, N, 2) the nominal actions.
+            theta: (E, N) the scores.
+            velocities: (E, N, 2), or None for the models that need none.
+            omega: (E, N, N) weight matrices, or None (from ``theta``).
+            with_rows: Keep every agent's rows in the result.
+            known: What the caller keeps of its scenes (``KnownScenes``: each scene's smallest
+                weight, each agent's nearest distance, the weights' floor), which the large-N
+                path needs.
+            weighting: Each env's weighting; None: the configured one.
+            bodies: Each agent's radius and box; None: the config's.
+            obstacles: Capsules (O, 5) or (E, O, 5) ([Obstacles][rsvo_env.Obstacles]).
+            headings: (E, N) the unicycle's headings (the model's own state).
+
+        Returns:
+            The actions and what the filter decided, per env.
         """
         cfg = self.config
         omega_min, nearest, floor = KnownScenes() if known is None else known
@@ -343,7 +402,7 @@ class SafetyFilter:
         return radii, reach
 
     def _floor(self, theta: NDArray, omega: NDArray | None) -> Floor:
-        """:func:`pair_weights.weight_floor` of the weights in force, from the scores alone (O(N)
+        """``pair_weights.weight_floor`` of the weights in force, from the scores alone (O(N)
         memory) for a named weighting."""
         if omega is not None:  # a caller's matrix, whatever the configured mode says
             return pair_weights.weight_floor(omega)

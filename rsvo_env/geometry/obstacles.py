@@ -41,8 +41,14 @@ def _table(values: ArrayLike | None, name: str, width: int, what: str) -> NDArra
 
 @dataclass(frozen=True)
 class Obstacles:
-    """Capsules (O, 5): segment ends ``x0, y0, x1, y1`` and radius ``rho``; circles first, then
-    walls, in the order given."""
+    """Static obstacles as capsules: circles and walls of a thickness, in the units of the
+    agents' positions. Build them with ``of``.
+
+    Attributes:
+        capsules: (O, 5) segment ends ``x0, y0, x1, y1`` and radius ``rho`` (a circle is a
+            segment of length 0), circles first, then walls, in the order given; or (E, O, 5),
+            one set an env.
+    """
 
     capsules: NDArray[np.float64]
 
@@ -53,8 +59,20 @@ class Obstacles:
         walls: ArrayLike | None = None,
         thickness: ArrayLike = 0.0,
     ) -> Obstacles:
-        """Circles (C, 3) ``x, y, r`` with ``r > 0``; walls (W, 2, 2) ends, of ``thickness``
-        (one number or one per wall, >= 0). Bad input raises ``ValueError`` naming it."""
+        """Obstacles from circles and walls.
+
+        Args:
+            circles: (C, 3) rows ``x, y, r`` with ``r > 0``; None: none.
+            walls: (W, 2, 2) each wall's two ends; None: none.
+            thickness: The walls' radius (half their thickness), one number or one per wall,
+                >= 0.
+
+        Returns:
+            The obstacles, circles first.
+
+        Raises:
+            ValueError: A bad value, naming the field, the obstacle and the value.
+        """
         c = _table(circles, "circles", 3, "(x, y, r)")
         bad = c[:, 2] <= 0
         if bad.any():
@@ -82,9 +100,16 @@ class Obstacles:
         return self.capsules.shape[-2]
 
     def clearance(self, positions: NDArray, radii: NDArray | float = 0.0) -> NDArray[np.float64]:
-        """(..., N) each body's distance to the nearest obstacle surface, ``|x - c| - rho - r``
-        (inf without one); ``positions`` (N, 2) or (E, N, 2), capsules one set for all or one
-        set an env."""
+        """Each body's distance to the nearest obstacle surface, ``|x - c| - rho - r``.
+
+        Args:
+            positions: The bodies' centres, (N, 2) or (E, N, 2) (the latter where the capsules
+                are one set an env).
+            radii: The bodies' radii, one number or one per body.
+
+        Returns:
+            (..., N) the clearances (inf without obstacles; negative: overlapping).
+        """
         x = np.asarray(positions, dtype=np.float64)
         if len(self) == 0:
             return np.full(x.shape[:-1], np.inf) - radii
@@ -96,7 +121,15 @@ class Obstacles:
         return d.min(axis=-1) - radii
 
     def contains(self, positions: NDArray, radii: NDArray | float) -> NDArray[np.bool_]:
-        """Which bodies (..., N) overlap an obstacle (the barrier h < 0)."""
+        """Which bodies overlap an obstacle (the barrier ``h < 0``).
+
+        Args:
+            positions: The bodies' centres, (N, 2) or (E, N, 2).
+            radii: The bodies' radii, one number or one per body.
+
+        Returns:
+            (..., N) True where a body overlaps an obstacle.
+        """
         return self.clearance(positions, radii) < 0
 
 

@@ -37,7 +37,7 @@ def agent_radii(
     omega_floor: NDArray, gamma: float, speed: NDArray, reach: NDArray
 ) -> NDArray[np.float64]:
     """Per agent, the distance beyond which none of its rows with a positive weight can bind:
-    :func:`sensing_radius` of its own smallest positive weight (0 for an agent without one).
+    ``sensing_radius`` of its own smallest positive weight (0 for an agent without one).
     ``omega_floor`` (E, N, K); ``speed`` (E, N): the largest norm its action can take (its
     box's largest input vector, or less: ``rsvo_env.filter.projection_disk``); ``reach`` (E, N): the
     largest safe distance of its pairs, ``r_i + max_j r_j``."""
@@ -55,7 +55,7 @@ def agent_radii(
 
 @njit(cache=True)
 def _agent_radii(floor, gamma, speed, reach, out):
-    """:func:`agent_radii` in one compiled pass: the root of ``w gamma d^2 - 2 u d - w gamma
+    """``agent_radii`` in one compiled pass: the root of ``w gamma d^2 - 2 u d - w gamma
     R^2`` per floor ``w``."""
     E, n, K = floor.shape
     for e in range(E):
@@ -80,7 +80,7 @@ def pairs_within_agent_radii(
     """Pairs (I < J, flat indices) of agents of the same env closer than the larger of their
     radii against each other's group (``radius`` (E, N, K) from ``floor``), plus the floor's
     required pairs, sorted: the all-pairs order, kept. ``disk``: see
-    :func:`grid.pairs_within_radii`."""
+    ``grid.pairs_within_radii``."""
     I, J = grid.pairs_within_radii(positions, radius, floor[1], disk)
     required = floor[2]
     if len(required) == 0:
@@ -105,7 +105,7 @@ def candidate_pairs(
     positions: NDArray, radius: float = float("inf")
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Pairs (I < J, flat indices) of agents of the same env that may interact: all pairs, or
-    those within ``radius`` (the compiled grid of :mod:`rsvo_env.util.grid`, env by env, for
+    those within ``radius`` (the compiled grid of ``rsvo_env.util.grid``, env by env, for
     many agents). ``positions`` is (E, N, 2)."""
     E, n = positions.shape[0], positions.shape[1]
     if n < 2:

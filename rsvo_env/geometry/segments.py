@@ -37,7 +37,7 @@ def _to_segment(x0, x1, s0x, s0y, s1x, s1y):
 
 @njit(cache=True, inline="always", error_model="numpy")
 def separate(a0x, a0y, a1x, a1y, b0x, b0y, b1x, b1y, fx, fy):
-    """One pair of segments: ``(n_x, n_y, bound)`` of :func:`separation`."""
+    """One pair of segments: ``(n_x, n_y, bound)`` of ``separation``."""
     # the four endpoint-to-segment offsets, each from B toward A; the first smallest wins
     bx, by = _to_segment(a0x, a0y, b0x, b0y, b1x, b1y)
     best = bx * bx + by * by

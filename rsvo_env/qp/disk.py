@@ -40,7 +40,7 @@ def _on_line(rows, k, r, px, py, toward):
     A chord that rounds to a point (lines through one point, a line tangent to the disk) can
     come out a hair empty or a hair outside the disk; it is read as empty only where, at the
     point of the chord where the largest violation of the rows before k is least, a row or the
-    disk is violated by more than ``ROOM r`` (:func:`_balanced`)."""
+    disk is violated by more than ``ROOM r`` (``_balanced``)."""
     ax, ay, bk = rows[k, 0], rows[k, 1], rows[k, 2]
     disc = (r - bk) * (r + bk)  # not r^2 - b^2: a line that barely cuts the disk keeps its chord
     if disc < 0.0:
@@ -171,6 +171,6 @@ def solve(px, py, rows, nrows, r, bisectors):
 
 @njit(cache=True)
 def solve_disk(px, py, rows, nrows, r, bisectors, res):
-    """:func:`solve` into ``res``; returns whether there was room."""
+    """``solve`` into ``res``; returns whether there was room."""
     res[0], res[1], room = solve(px, py, rows, nrows, r, bisectors)
     return room

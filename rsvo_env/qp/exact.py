@@ -13,7 +13,7 @@ offsets). An empty polygon (one that stays empty when every row is moved out by
 the action that minimises the largest normalised violation ``max_k (a_k u - b_k)/|a_k|`` over
 the box, and among those the one closest to the nominal (the role of ORCA's
 ``linearProgram3``): the min-max value ``t`` by Seidel's incremental linear program
-(:mod:`rsvo_env.qp.least_violation`), then the exact projection onto the rows shifted by ``t``.
+(``rsvo_env.qp.least_violation``), then the exact projection onto the rows shifted by ``t``.
 """
 
 from __future__ import annotations
@@ -153,7 +153,7 @@ def solve_rows(nx, ny, rows, nrows, lo0, lo1, hi0, hi1, out):
 
 @njit(cache=True)
 def solve_point(nx, ny, rows, nrows, lo0, lo1, hi0, hi1, out):
-    """:func:`solve_rows` without counting the active rows: (feasible, max_violation)."""
+    """``solve_rows`` without counting the active rows: (feasible, max_violation)."""
     scale = max(max(abs(lo0), abs(hi0)), max(abs(lo1), abs(hi1)))
     ux, uy, ok = _project(nx, ny, rows, nrows, 0.0, lo0, lo1, hi0, hi1, scale)
     violation = 0.0
@@ -254,7 +254,7 @@ def solve_csr(
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64]]:
-    """:func:`solve_batch` of rows stored by agent (:class:`rsvo_env.qp.rows.Rows`): QP i has the
+    """``solve_batch`` of rows stored by agent (``rsvo_env.qp.rows.Rows``): QP i has the
     rows ``A[offsets[i]:offsets[i + 1]]`` (R, 2), ``b`` (R,); the scratch space is the widest
     agent's, once per thread, so memory follows the rows, not n times the widest."""
     nominal, lo, hi, outputs = _batch(nominal, lo, hi)

@@ -6,7 +6,7 @@ algorithm as ORCA's ``linearProgram3`` solves it (van den Berg et al.): keep the
 first rows; when row i is violated by more than it, the optimum of the first i + 1 rows lies on
 row i's plane ``t = a_i u - b_i``, where the program is 2-D: maximise ``-a_i u`` over the box
 with ``(a_m - a_i) u <= b_m - b_i`` for m < i (row i the worst of them), itself solved
-incrementally on lines (:func:`_deepest`). Where optima tie (parallel rows), the argument still
+incrementally on lines (``_deepest``). Where optima tie (parallel rows), the argument still
 holds: the segment of old optima crosses row i's plane. The work is O(K^2) for K rows at worst,
 and a handful of 1-D problems for a typical agent, where the bisection it replaces (~45 exact
 projections) cost 45 times a feasible QP.

@@ -205,7 +205,7 @@ def _solve_unit(
     solver: str,
     opts: dict[str, Any],
 ) -> tuple[NDArray[np.float64], bool, float]:
-    """:func:`solve_one` of a problem already in units of its box, with unit rows."""
+    """``solve_one`` of a problem already in units of its box, with unit rows."""
     x = _qp(nominal, A, b, lo, hi, solver, opts)
     if x is not None:
         return x, True, 0.0
@@ -252,7 +252,7 @@ def solve_batch(
     solver: str = "clarabel",
     **options: Any,
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64]]:
-    """Same contract as :func:`rsvo_env.qp.exact.solve_batch`, one qpsolvers call a row."""
+    """Same contract as ``rsvo_env.qp.exact.solve_batch``, one qpsolvers call a row."""
     n = nominal.shape[0]
     m = np.asarray(mask, dtype=bool).reshape(n, -1)
     offsets = np.concatenate([[0], np.cumsum(m.sum(axis=1))])
@@ -271,7 +271,7 @@ def solve_csr(
     solver: str = "clarabel",
     **options: Any,
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64]]:
-    """Same contract as :func:`rsvo_env.qp.exact.solve_csr`, one qpsolvers call a row."""
+    """Same contract as ``rsvo_env.qp.exact.solve_csr``, one qpsolvers call a row."""
     n = nominal.shape[0]
     lo = np.broadcast_to(lo, (n, 2))
     hi = np.broadcast_to(hi, (n, 2))

@@ -26,7 +26,7 @@ class Rows:
 
     ``neighbor[k]`` is the other agent of row k, ``h[k]`` the pair's barrier value; ``pair_h``
     holds the barrier value of every pair examined, culled or not, in pair order.
-    Double-integrator diagnostics: ``unrecoverable`` and ``capped`` per row. :meth:`padded`
+    Double-integrator diagnostics: ``unrecoverable`` and ``capped`` per row. ``padded``
     gives the same rows as (n, K) arrays with a mask, for inspection.
     """
 

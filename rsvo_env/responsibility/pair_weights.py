@@ -75,9 +75,9 @@ def score_groups(theta: NDArray) -> tuple[NDArray[np.int64], int]:
 
 
 def theta_floor(theta: NDArray, mode: str) -> Floor:
-    """:func:`weight_floor` of a named weighting from the scores (E, N) alone, in O(N) time and
+    """``weight_floor`` of a named weighting from the scores (E, N) alone, in O(N) time and
     memory at any ratio of scores, and finer: the agents fall into up to ``THETA_GROUPS``
-    groups (:func:`score_groups`), and agent i gets its smallest positive weight against each
+    groups (``score_groups``), and agent i gets its smallest positive weight against each
     group (E, N, K). The weight of i against j grows with theta_j, so that is the weight against
     the group's smallest positive score, lowered by ``FLOOR_MARGIN`` (a bound on the rounding of
     the weights the filter uses, not a guess); a floor the margin takes to 0 or below searches
@@ -111,8 +111,8 @@ def theta_floor(theta: NDArray, mode: str) -> Floor:
 
 
 def floor_of(theta: NDArray, mode: Weighting, matrix: NDArray | None = None) -> Floor:
-    """The floor of weighting ``mode`` for scores (E, N): :func:`theta_floor` for a named mode
-    where it applies, else :func:`weight_floor` of the weight matrices (``matrix``, or built)."""
+    """The floor of weighting ``mode`` for scores (E, N): ``theta_floor`` for a named mode
+    where it applies, else ``weight_floor`` of the weight matrices (``matrix``, or built)."""
     if isinstance(mode, str):
         return theta_floor(theta, mode)
     return weight_floor(weight_matrix(theta, mode) if matrix is None else matrix)
@@ -132,7 +132,7 @@ def omega_pairs(omega, I, J, n):
 
 @njit(cache=True)
 def _shares(theta, I, J):
-    """:func:`responsibility.share_of` of flat pairs."""
+    """``responsibility.share_of`` of flat pairs."""
     P = I.shape[0]
     out = np.empty(P)
     for p in range(P):
@@ -161,7 +161,7 @@ def scored_pairs(
 ) -> NDArray[np.float64]:
     """(P, 2) omega_IJ, omega_JI of flat pairs from validated scores (E, N) (Thm. 1: the
     weight matrix's entries, ``pair_omega`` above the diagonal), the same numbers as
-    :func:`responsibility.scored_weight` in two compiled passes and numpy's cosine;
+    ``responsibility.scored_weight`` in two compiled passes and numpy's cosine;
     ``symmetric`` (E,): envs whose weighting is symmetric (1/2 each)."""
     E, n = theta.shape
     if symmetric is None:
@@ -184,7 +184,7 @@ def weights_of(
 
 def weight_matrices(theta: NDArray, modes: Sequence[Weighting]) -> NDArray[np.float64]:
     """(E, N, N) each env's weight matrix from its scores ``theta`` (E, N) and weighting
-    ``modes`` (E,), the numbers :func:`weights_of` gives its pairs."""
+    ``modes`` (E,), the numbers ``weights_of`` gives its pairs."""
     if any(callable(m) for m in modes):
         return np.stack([weight_matrix(t, m) for t, m in zip(theta, modes, strict=True)])
     W = named_weights(np.ascontiguousarray(theta, dtype=np.float64), "asymmetric")

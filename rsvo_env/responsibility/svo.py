@@ -31,9 +31,19 @@ def _pair(theta_i: ArrayLike, theta_j: ArrayLike) -> tuple[NDArray, NDArray]:
 def r_svo(theta_i: ArrayLike, theta_j: ArrayLike) -> NDArray[np.float64] | float:
     """R-SVO angle ``phi_i = theta_i/(theta_i+theta_j) * pi/2`` (paper, Def. 1, eq. ``rsvo``).
 
-    Broadcasts over arrays. ``theta_i = theta_j = 0`` has no value in the paper; we define
-    ``phi = pi/4`` there (equal personalities), so that ``omega = 0.5``.
-    Raises ``ValueError`` naming the index for negative, NaN or infinite scores.
+    ``theta_i = theta_j = 0`` has no value in the paper; we define ``phi = pi/4`` there (equal
+    personalities), so that ``omega = 0.5``.
+
+    Args:
+        theta_i: Agent i's personality score(s), >= 0 (small: egoistic); a number or an array.
+        theta_j: The other agent's score(s), broadcast against ``theta_i``.
+
+    Returns:
+        The angle ``phi_i`` in [0, pi/2]: a float for two numbers, else an array of their
+        broadcast shape.
+
+    Raises:
+        ValueError: A score is negative, NaN, infinite or not a real number (naming its index).
     """
     ti, tj = _pair(theta_i, theta_j)
     phi = _share(ti, tj) * (np.pi / 2)
@@ -79,7 +89,17 @@ def responsibility_weight(theta_i: ArrayLike, theta_j: ArrayLike) -> NDArray[np.
     Evaluated as ``(1 + cos(2 phi)) / 2``, which is exactly 0.5 at ``phi = pi/4``, 0 at
     ``pi/2`` and 1 at 0 (``cos(phi)**2`` is 0.5000000000000001 at ``pi/4``); 0.5 when both
     scores are 0. A smaller theta (egoist) gives a larger omega, a looser row
-    ``A_i u <= omega_i b_i``.
+    ``A_i u <= omega_i b_i``; ``omega_i + omega_j = 1``.
+
+    Args:
+        theta_i: Agent i's personality score(s), >= 0; a number or an array.
+        theta_j: The other agent's score(s), broadcast against ``theta_i``.
+
+    Returns:
+        ``omega_i`` in [0, 1]: a float for two numbers, else an array of the broadcast shape.
+
+    Raises:
+        ValueError: A score is negative, NaN, infinite or not a real number (naming its index).
     """
     omega = pair_omega(*_pair(theta_i, theta_j))
     return float(omega) if omega.ndim == 0 else omega
@@ -88,12 +108,23 @@ def responsibility_weight(theta_i: ArrayLike, theta_j: ArrayLike) -> NDArray[np.
 def weight_matrix(theta: ArrayLike, mode: Weighting = "asymmetric") -> NDArray[np.float64]:
     """The (N, N) matrix ``W[i, j] = omega_i`` of agent i against agent j (Thm. 1).
 
-    ``mode="asymmetric"``: the paper's R-SVO weights. ``mode="symmetric"``: 0.5 everywhere, the
-    homogeneous baseline of the paper's symmetric examples. A callable ``theta -> W`` is
-    validated: entries in [0, 1] and ``W + W.T == 1`` off the diagonal (to 1e-9), since without
-    that the pair rows no longer sum to the centralized condition. The diagonal is 0 (no row).
-    The upper triangle is computed and the lower one set to ``1 - W.T``, so the pair sum is 1 to
-    one rounding. A batch of scores (E, N) gives (E, N, N).
+    The diagonal is 0 (no row). The upper triangle is computed and the lower one set to
+    ``1 - W.T``, so the pair sum is 1 to one rounding.
+
+    Args:
+        theta: The scores (N,), >= 0, or a batch of them (E, N), which gives (E, N, N).
+        mode: ``"asymmetric"``, the paper's R-SVO weights; ``"symmetric"``, 0.5 everywhere (the
+            homogeneous baseline of the paper's symmetric examples); or a callable
+            ``theta -> W``, validated: entries in [0, 1] and ``W + W.T == 1`` off the diagonal
+            (to 1e-9), since without that the pair rows no longer sum to the centralized
+            condition.
+
+    Returns:
+        The weight matrix (N, N), or (E, N, N) for a batch.
+
+    Raises:
+        ValueError: A bad score (naming its index), an unknown mode, or a callable's matrix of
+            the wrong shape or outside the conditions above.
     """
     raw = np.asarray(theta)
     if raw.ndim == 2:
@@ -130,7 +161,7 @@ def _unknown(mode: object) -> ValueError:
 
 @njit(cache=True, inline="always")
 def share_of(ti: float, tj: float) -> float:
-    """One pair's ``theta_i / (theta_i + theta_j)``, compiled, as :func:`_share` computes it
+    """One pair's ``theta_i / (theta_i + theta_j)``, compiled, as ``_share`` computes it
     (both halved where the sum overflows; 0.5 where both are 0)."""
     total = ti + tj
     if not np.isfinite(total):
@@ -141,7 +172,7 @@ def share_of(ti: float, tj: float) -> float:
 
 @njit(cache=True)
 def _upper_shares(th):
-    """(K, N, N): :func:`share_of` above the diagonal of each of K envs' scores (K, N); 0
+    """(K, N, N): ``share_of`` above the diagonal of each of K envs' scores (K, N); 0
     elsewhere."""
     K, n = th.shape
     out = np.zeros((K, n, n))
@@ -190,8 +221,8 @@ def _compiled_weights(th: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
 def named_weights_and_floor(
     th: NDArray[np.float64], mode: str
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """:func:`named_weights` of scores (..., N), and each matrix's smallest off-diagonal
-    weight (:func:`smallest_weight`), the one block's from the same compiled pass."""
+    """``named_weights`` of scores (..., N), and each matrix's smallest off-diagonal
+    weight (``smallest_weight``), the one block's from the same compiled pass."""
     if mode == "asymmetric" and _one_block(th):
         return _compiled_weights(th)
     w = named_weights(th, mode)
@@ -199,7 +230,7 @@ def named_weights_and_floor(
 
 
 def named_weights(th: NDArray[np.float64], mode: str) -> NDArray[np.float64]:
-    """The matrices of a named mode (:func:`weight_matrix`) for scores (..., N) that are
+    """The matrices of a named mode (``weight_matrix``) for scores (..., N) that are
     already valid (a caller that checked them, as the core does at every reset), a block of
     rows at a time so a crowd of 10,000 needs the matrix and no N x N temporaries."""
     n = th.shape[-1]

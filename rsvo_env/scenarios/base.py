@@ -305,7 +305,7 @@ class Scenario:
 
     def command(self, state: Any, preferred: NDArray[np.float64]) -> NDArray[np.float64]:
         """The scripted controller's inputs from the ``preferred`` velocities: the model's
-        inputs (``Dynamics.track``) that give its steered points the velocity of :meth:`steer`."""
+        inputs (``Dynamics.track``) that give its steered points the velocity of ``steer``."""
         return self.model.track(state, self.steer(state, preferred), self.params,
                                 self.agent_limits)  # fmt: skip
 

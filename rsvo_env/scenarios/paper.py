@@ -1,6 +1,6 @@
 """The paper's experiments (Sec. V), one small class each.
 
-Each is a small subclass of :class:`rsvo_env.scenarios.base.Scenario` with its defaults
+Each is a small subclass of ``rsvo_env.scenarios.base.Scenario`` with its defaults
 (``docs/scenarios.md``) and the hooks it changes.
 """
 

@@ -1,4 +1,4 @@
-"""Every scenario by name: ``SCENARIOS`` and :func:`make_scenario`."""
+"""Every scenario by name: ``SCENARIOS`` and ``make_scenario``."""
 
 from __future__ import annotations
 
@@ -27,8 +27,21 @@ SCENARIOS: dict[str, type[Scenario]] = {
 
 
 def make_scenario(scenario: str | Scenario, **kwargs: Any) -> Scenario:
-    """A scenario by name (``position_swap``, ``circular_swap``, ``ramp_merge``, ``crowd``,
-    ``custom``, ``doorway``, ``obstacle_field``, ``unicycle_crowd``)."""
+    """A scenario by name.
+
+    Args:
+        scenario: ``position_swap``, ``circular_swap``, ``ramp_merge``, ``crowd``, ``custom``,
+            ``doorway``, ``obstacle_field``, ``unicycle_crowd`` (``SCENARIOS``), or a
+            ``Scenario``, returned as it is.
+        **kwargs: The scenario's parameters (its page lists each, with its default).
+
+    Returns:
+        The scenario.
+
+    Raises:
+        TypeError: An unknown keyword, or keywords with a ``Scenario`` given.
+        ValueError: An unknown name, or a bad value (naming the parameter and the value).
+    """
     if isinstance(scenario, Scenario):
         if kwargs:
             raise TypeError("keyword arguments go to the scenario's constructor, not here")

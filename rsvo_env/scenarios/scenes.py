@@ -1,6 +1,6 @@
 """Scenes with bodies of their own size and static obstacles (``docs/scenarios.md``):
 
-* ``custom`` (:class:`Scene`): the user's own starts, goals, radii and obstacles, as arrays;
+* ``custom`` (``Scene``): the user's own starts, goals, radii and obstacles, as arrays;
 * ``doorway``: two groups cross through the gap of a wall, the classic bottleneck;
 * ``obstacle_field``: a crowd crosses a field of random circular obstacles.
 """
@@ -43,13 +43,21 @@ def _points(value: Any, name: str, n: int | None) -> NDArray[np.float64]:
 
 
 class Scene(Scenario):
-    """The user's own scene from arrays: ``starts``, ``goals`` (N, 2), ``radii`` (N,) body
-    radii (default ``safety_radius / 2``), obstacles (``circles`` (C, 3), ``walls`` (W, 2, 2) of
-    ``thickness``), any model by ``dynamics`` with its input bound one or one per agent
-    (``u_max`` the speed limit of the single integrator and the unicycle, ``a_max`` the
-    acceleration limit of the double integrator, whose scripted controller tracks the
-    move-to-goal velocity of speed ``u_max`` with gain ``k_v``). Validated on construction: an
-    overlapping start, a start or goal inside an obstacle raises naming the agent."""
+    """The user's own scene from arrays (the registry's ``custom``).
+
+    Args:
+        **kwargs: ``starts``, ``goals`` (N, 2), ``radii`` (N,) body radii (default
+            ``safety_radius / 2``), obstacles (``circles`` (C, 3), ``walls`` (W, 2, 2) of
+            ``thickness``), any model by ``dynamics`` with its input bound one or one per agent
+            (``u_max`` the speed limit of the single integrator and the unicycle, ``a_max`` the
+            acceleration limit of the double integrator, whose scripted controller tracks the
+            move-to-goal velocity of speed ``u_max`` with gain ``k_v``), and every common
+            scenario parameter (``docs/scenarios.md``).
+
+    Raises:
+        ValueError: An overlapping start, a start or goal inside an obstacle (naming the
+            agent), or a bad value (naming the parameter).
+    """
 
     name = "custom"
     models = dynamics.NAMES

@@ -4,7 +4,7 @@
 
     actions -> controls (clip norm, scale, frame) -> [filter stage] -> integrate -> signals
 
-The filter stage (:class:`rsvo_env.filter.safety.SafetyFilter` s) acts right before integration on
+The filter stage ([`SafetyFilter`][rsvo_env.SafetyFilter] s) acts right before integration on
 the state being integrated: the control it certifies is the one integrated, whatever the wrappers.
 Adapters (``RSVOParallelEnv``: E = 1, dicts; ``BatchedEnv``: arrays) only reshape the API. Each
 env has its own seeded generator; this class is the one writer of the state.
@@ -48,12 +48,12 @@ class Simulator:
     """State arrays (E, N, ...), per-env generators and per-env reset, and the step above.
 
     ``weighting``: every episode's default (a reset option overrides it once); ``rewards``
-    (:data:`REWARDS`, each ``reward_*`` keyword) weigh the reward terms (``reward_team``: the share
+    (``REWARDS``, each ``reward_*`` keyword) weigh the reward terms (``reward_team``: the share
     of each agent's reward replaced by its env's mean); ``stall_clock``: observe each agent's
-    :class:`rsvo_env.control.stall.StallClock`, in units of that many steps (None: not observed);
+    ``rsvo_env.control.stall.StallClock``, in units of that many steps (None: not observed);
     ``record_series`` (E = 1) keeps the series the paper plots; ``theta_action``: each action gets a
     third component, the agent's theta for the step, on ``theta_action_range``
-    (:mod:`rsvo_env.control.theta_action`)."""
+    (``rsvo_env.control.theta_action``)."""
 
     def __init__(
         self,
@@ -179,7 +179,7 @@ class Simulator:
     # ---- episodes ---------------------------------------------------------------------------
     def check_options(self, options: dict | None) -> tuple[NDArray | None, Weighting]:
         """Theta (E, N) or None, and the weighting, from reset options
-        (:func:`rsvo_env.sim.reset_options.check_options`)."""
+        (``rsvo_env.sim.reset_options.check_options``)."""
         return check_options(self, options)
 
     def reset(
@@ -191,7 +191,7 @@ class Simulator:
     ) -> None:
         """Start new episodes in ``envs``; env e draws from a generator seeded with its seed, or
         goes on with its own generator when the seed is None. ``theta``, ``weighting``: from
-        :meth:`check_options`. Nothing is written unless every env's start is valid."""
+        ``check_options``. Nothing is written unless every env's start is valid."""
         sc = self.scenario
         weighting = self.weighting if weighting is None else weighting
         drawn = []
@@ -229,14 +229,14 @@ class Simulator:
 
     def set_residual(self, residual: Residual | None) -> None:
         """Residual actions by ``residual``'s rule (None: off): each action is added to the
-        scripted command, gated off near the goal (:class:`rsvo_env.control.residual.Residual`)."""
+        scripted command, gated off near the goal (``rsvo_env.control.residual.Residual``)."""
         self.residual = residual
 
     def to_controls(self, actions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Normalised actions (E, N, 2) to physical controls, by the model's map (the planar
         one: clip the norm to 1, scale by each agent's limit, rotate out of the goal frame);
         with residual actions, those controls added to the scripted command and held to each
-        agent's bounds by the model (see :meth:`set_residual`)."""
+        agent's bounds by the model (see ``set_residual``)."""
         sc = self.scenario
         model, params, limits = sc.model, sc.params, sc.agent_limits
         u = model.to_controls(actions, params, self._planar_controls, limits)
@@ -280,7 +280,7 @@ class Simulator:
 
     # ---- the step ---------------------------------------------------------------------------
     def _floor(self) -> Floor | None:
-        """The weights' floor for the large-N pair search (:meth:`Weights.floor`)."""
+        """The weights' floor for the large-N pair search (``Weights.floor``)."""
         if self.n <= sizes.ALL_PAIRS_MAX_AGENTS:
             return None
         return self.weights.floor(self.state.theta, self.state.weighting)
@@ -338,7 +338,7 @@ class Simulator:
         theta actions (the scores of this step, and of its weights, come first).
 
         Returns observations (E, N, D) float32, rewards (E, N), terminated and truncated (E,),
-        and the per-agent signals (E, N, ...) of :meth:`signals`.
+        and the per-agent signals (E, N, ...) of ``signals``.
         """
         s, sc = self.state, self.scenario
         if self.theta_action is not None:
@@ -362,7 +362,7 @@ class Simulator:
         return self.observe(), reward, terminated, truncated, signals
 
     def signals(self, *args: Any) -> dict[str, NDArray]:
-        """Per-agent signals (E, N, ...) (:func:`rsvo_env.sim.signals.signals`)."""
+        """Per-agent signals (E, N, ...) (``rsvo_env.sim.signals.signals``)."""
         return signals.signals(self, *args)
 
     def observe(self, envs: NDArray[np.int64] | None = None) -> NDArray[np.float32]:

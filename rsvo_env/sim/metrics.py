@@ -74,7 +74,7 @@ def accumulate_step(
 ):
     """One step of every env: counters, first-event steps, per-agent sums (see ``update``).
     A collision step has some ``contact[e, i] < collision_below`` (``contact`` the nearest
-    distance itself, or :func:`rsvo_env.geometry.clearance.contact` with the threshold 1 - 1e-9).
+    distance itself, or ``rsvo_env.geometry.clearance.contact`` with the threshold 1 - 1e-9).
 
     counts[e] = (steps, deadlock_onset, deadlock_resolved, completed, collision_steps);
     sums[e, i] = (path length, deviation); ``feasible`` and ``min_h`` are empty without filter;
@@ -134,7 +134,7 @@ def _arrivals(arrival):
 
 @njit(cache=True)
 def _flat(counts, min_distance, infeasible, arrival):
-    """The :data:`FLAT_FIELDS` arrays (E,), fresh, in one pass (a step's infos carry them)."""
+    """The ``FLAT_FIELDS`` arrays (E,), fresh, in one pass (a step's infos carry them)."""
     E = arrival.shape[0]
     success = np.empty(E, dtype=np.bool_)
     arrived = np.empty(E, dtype=np.int64)
@@ -165,7 +165,7 @@ def _add_counts(unrecoverable, more_unrecoverable, capped, more_capped):
 
 @njit(cache=True)
 def _flat_row(counts, min_distance, infeasible, arrival, e):
-    """Env e's :func:`_flat` values as scalars, in :data:`FLAT_FIELDS` order."""
+    """Env e's ``_flat`` values as scalars, in ``FLAT_FIELDS`` order."""
     arrived, makespan = _arrivals(arrival[e])
     return (
         counts[e, 0],
@@ -182,7 +182,7 @@ def _flat_row(counts, min_distance, infeasible, arrival, e):
 class EpisodeMetrics:
     """Accumulates the running episode of each of E envs in (E,) and (E, N) arrays, without
     keeping more than per-agent sums; with ``record_series`` (one env only) also the per-step
-    series the paper plots. Steps without an event keep -1 (``None`` in :meth:`summary`)."""
+    series the paper plots. Steps without an event keep -1 (``None`` in ``summary``)."""
 
     def __init__(
         self, num_envs: int, n: int, dt: float, safety_radius: float, record_series: bool = False
@@ -251,7 +251,7 @@ class EpisodeMetrics:
     ) -> None:
         """Record one more step of every env (arrays (E, N, ...)): positions before and after,
         the state's derived signals, the requested and the applied controls, the filter's stats;
-        ``contact``: :func:`rsvo_env.geometry.clearance.contact` where bodies differ or obstacles
+        ``contact``: ``rsvo_env.geometry.clearance.contact`` where bodies differ or obstacles
         stand
         (collisions are then counted on it)."""
         feasible, min_h = self.begin(filter_stats)
@@ -292,7 +292,7 @@ class EpisodeMetrics:
         return contact, 1.0 - COLLISION_TOL
 
     def begin(self, filter_stats: dict[str, Any] | None) -> tuple[NDArray, NDArray]:
-        """The part of :meth:`update` before its kernel (``accumulate_step``): the filter's counts
+        """The part of ``update`` before its kernel (``accumulate_step``): the filter's counts
         added; returns the kernel's ``feasible`` and ``min_h`` arguments."""
         if filter_stats is None:
             return _NO_FEASIBLE, _NO_MIN_H
@@ -305,7 +305,7 @@ class EpisodeMetrics:
         return filter_stats["feasible"], filter_stats["min_h"]
 
     def end(self) -> None:
-        """The part of :meth:`update` after its kernel: the per-step series, when recorded."""
+        """The part of ``update`` after its kernel: the per-step series, when recorded."""
         if self.record_series:
             self.min_distance_series.append(float(self.step_series[0, 0]))
             self.avg_min_distance_series.append(float(self.step_series[0, 1]))
@@ -316,7 +316,7 @@ class EpisodeMetrics:
         return {f"episode_{k}": v for (k, _), v in zip(FLAT_FIELDS, values, strict=True)}
 
     def flat_row(self, e: int = 0) -> tuple:
-        """Env e's :meth:`flat` values, in :data:`FLAT_FIELDS` order, as Python scalars."""
+        """Env e's ``flat`` values, in ``FLAT_FIELDS`` order, as Python scalars."""
         # one compiled call: a step's infos read this row, at small N a good part of the step
         return _flat_row(self.counts, self.min_distance, self.infeasible, self.arrival, e)
 

@@ -5,8 +5,8 @@ is at its goal and whom the right-hand rule turns; records the step in the episo
 marks first arrivals; computes the reward terms and which envs terminated; advances the stall
 clock (``rsvo_env.control.stall``). For a scenario with
 the base hooks (``Scenario.at_goal``, ``right_hand_active``, ``reward``) and few agents all of it
-is one compiled call of the same kernels (:func:`in_one_call`), so a small env pays one dispatch
-instead of a dozen; otherwise the hooks are called in turn (:func:`hook_by_hook`). Both give the
+is one compiled call of the same kernels (``in_one_call``), so a small env pays one dispatch
+instead of a dozen; otherwise the hooks are called in turn (``hook_by_hook``). Both give the
 same numbers, bit for bit (tested).
 """
 
@@ -32,7 +32,7 @@ _HOOKS = ("at_goal", "right_hand_active", "reward")
 
 
 def one_call_serves(scenario: Scenario, n: int) -> bool:
-    """Whether :func:`in_one_call` serves this scenario: its hooks are the base ones, and N is small
+    """Whether ``in_one_call`` serves this scenario: its hooks are the base ones, and N is small
     enough for the dense neighbour search."""
     base = all(getattr(type(scenario), h) is getattr(Scenario, h) for h in _HOOKS)
     return base and scenario.plain and 2 <= n <= sizes.ALL_PAIRS_MAX_AGENTS
@@ -144,7 +144,7 @@ def _in_one_call(
     terminated,
     truncated,
 ):
-    """:func:`hook_by_hook` with the base hooks, as one compiled pass of the same kernels, into the
+    """``hook_by_hook`` with the base hooks, as one compiled pass of the same kernels, into the
     given outputs (allocated by the caller: arrays a compiled call returns cost more each)."""
     E, n = x.shape[0], x.shape[1]
     dist, idx = knn_dense_arrays(x, max(k, 1))
@@ -201,7 +201,7 @@ def _in_one_call(
 def in_one_call(
     sim: SimulatorView, before: NDArray, requested: NDArray, applied: NDArray, stats: Any
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
-    """:func:`hook_by_hook` in one compiled call (the scenario must be :func:`one_call_serves`)."""
+    """``hook_by_hook`` in one compiled call (the scenario must be ``one_call_serves``)."""
     s, sc, m = sim.state, sim.scenario, sim.metrics
     feasible, min_h = m.begin(stats)
     p = sc.params

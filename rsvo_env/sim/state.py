@@ -1,6 +1,6 @@
 """The simulation state: arrays of E envs x N agents.
 
-The core (:class:`rsvo_env.sim.core.Simulator`) is the one writer of :class:`State`. Row ``[e, i]``
+The core (``rsvo_env.sim.core.Simulator``) is the one writer of ``State``. Row ``[e, i]``
 of every array is agent i of env e (``possible_agents[i]`` of the adapters).
 """
 
@@ -24,7 +24,7 @@ class State:
     goal at least once): (E, N), the first three derived from the current positions once per
     step; ``neighbors``: (E, N, K) local indices of the K nearest neighbours, nearest first;
     ``weighting``: the mode of each env. The weights live in the core's
-    :class:`rsvo_env.sim.weights.Weights`.
+    ``rsvo_env.sim.weights.Weights``.
     """
 
     positions: NDArray[np.float64]

@@ -1,6 +1,6 @@
 """What the stages of the step (after-step, signals, reset options) read and write of the
-simulator. :class:`rsvo_env.sim.core.Simulator` is the one implementation; the stages take it
-as a :class:`SimulatorView`, so that they never import the core that calls them."""
+simulator. ``rsvo_env.sim.core.Simulator`` is the one implementation; the stages take it
+as a ``SimulatorView``, so that they never import the core that calls them."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """The responsibility weights the simulation core keeps for its E envs (paper, Thm. 1).
 
 Up to ``sizes.WEIGHT_MATRIX_MAX_AGENTS`` agents an env, or whenever a callable weighting asks for
-one, the core keeps the (E, N, N) matrices of :func:`responsibility.weight_matrix`. Beyond that a
+one, the core keeps the (E, N, N) matrices of ``responsibility.weight_matrix``. Beyond that a
 named weighting needs only the scores: each weight is computed where it is read, by the matrix's own
 convention (``pair_omega(theta_i, theta_j)`` above the diagonal, ``1 - W.T`` below), so a crowd of
 10,000 holds O(N) weights, not 800 MB.
@@ -64,7 +64,7 @@ class Weights:
         self.version += 1
 
     def update_all(self, theta: NDArray, modes: Sequence[Weighting]) -> None:
-        """Every env has new scores (theta actions): one :meth:`update` per weighting in use."""
+        """Every env has new scores (theta actions): one ``update`` per weighting in use."""
         groups: dict[object, list[int]] = {}
         for e, m in enumerate(modes):
             # modes are strings or callables: equal strings group, a callable by identity
@@ -100,7 +100,7 @@ class Weights:
         return weights, False
 
     def floor(self, theta: NDArray, modes: Sequence[Weighting]) -> Floor:
-        """The floor of the large-N pair search (:mod:`rsvo_env.geometry.pairs`), once per change:
+        """The floor of the large-N pair search (``rsvo_env.geometry.pairs``), once per change:
         from
         the scores, per score group, when the weighting is named; from the matrix otherwise."""
         if self._floor is not None and self._floor[0] == self.version:

@@ -66,7 +66,7 @@ def _pairs(x, radius, group, cell, nominal, scaled_floor, reach, boxed):
     find it. So agent i skips group g when every member's radius against i's group exceeds
     its own: each pair it could find, the member keeps. With ``nominal`` (E, N, 2) (else
     empty), a pair is kept only where a side's row can bind within its disk [0, nominal]
-    (:func:`_may_bind`, weight times gamma ``scaled_floor`` (E, N, K), safe distance
+    (``_may_bind``, weight times gamma ``scaled_floor`` (E, N, K), safe distance
     ``reach`` (E, N)) or the side is ``boxed`` (E, N: its rows are all kept): the owning
     scan tests both sides."""
     E, n, K = radius.shape

@@ -31,7 +31,7 @@ def env_offsets(positions: NDArray[np.float64], margin: float = 0.0) -> NDArray[
 
 @njit(cache=True)
 def kernel_for(E, n):
-    """The kernel :func:`_knn_dense` runs on E envs of n agents: 0 insertion, 1 ranking, 2 env
+    """The kernel ``_knn_dense`` runs on E envs of n agents: 0 insertion, 1 ranking, 2 env
     lanes."""
     if E * n <= sizes.KNN_INSERTION_MAX_AGENTS:
         return 0
@@ -57,7 +57,7 @@ def _knn_dense(x, k, dist, idx):
 
 @njit(cache=True)
 def _knn_inserted(x, k, dist, idx):
-    """:func:`_knn_dense` by insertion into a sorted list: a strictly smaller squared distance
+    """``_knn_dense`` by insertion into a sorted list: a strictly smaller squared distance
     goes first, so ties keep the lower index."""
     E, n = x.shape[0], x.shape[1]
     d2 = np.empty(k)
@@ -88,7 +88,7 @@ def _knn_inserted(x, k, dist, idx):
 
 @njit(cache=True)
 def _knn_ranked(x, k, dist, idx):
-    """:func:`_knn_dense` by ranks: agent j's rank among agent i's neighbours counts the
+    """``_knn_dense`` by ranks: agent j's rank among agent i's neighbours counts the
     neighbours q nearer than j, and those as near with q < j. ``d2`` is symmetric, so for one
     (j, q) the count runs over all agents i along a row, branch-free and vectorised."""
     E, n = x.shape[0], x.shape[1]
@@ -124,7 +124,7 @@ def _knn_ranked(x, k, dist, idx):
 
 @njit(cache=True)
 def _slot_update(d2_before, d2_slot, near_before, near_slot, d2, j):
-    """One slot of a sorted list, in every env at once, as :func:`_knn_inserted` would leave it
+    """One slot of a sorted list, in every env at once, as ``_knn_inserted`` would leave it
     after offering neighbour j at squared distance ``d2``: the slot takes the one before it if
     that is farther than ``d2``, else ``d2`` if the slot itself is farther, else stays. Loads
     come before the selects so that the loop vectorises."""
@@ -140,9 +140,9 @@ def _slot_update(d2_before, d2_slot, near_before, near_slot, d2, j):
 
 @njit(cache=True)
 def _knn_lanes(x, k, dist, idx):
-    """:func:`_knn_dense` across envs: agent i's sorted list of every env is a column of
+    """``_knn_dense`` across envs: agent i's sorted list of every env is a column of
     (k + 1, E) arrays whose row 0 is a sentinel nearer than anything, and each neighbour j is
-    offered to all envs at once, slot by slot from the last (:func:`_slot_update`)."""
+    offered to all envs at once, slot by slot from the last (``_slot_update``)."""
     E, n = x.shape[0], x.shape[1]
     xs = np.empty((n, E))
     ys = np.empty((n, E))
@@ -174,7 +174,7 @@ def _knn_lanes(x, k, dist, idx):
 
 @njit(cache=True)
 def knn_dense_arrays(x, k):
-    """:func:`_knn_dense` with its outputs allocated here."""
+    """``_knn_dense`` with its outputs allocated here."""
     dist = np.empty((x.shape[0], x.shape[1], k))
     idx = np.empty((x.shape[0], x.shape[1], k), dtype=np.int64)
     _knn_dense(x, k, dist, idx)

@@ -45,7 +45,7 @@ def turn(v: NDArray, cos: NDArray, sin: NDArray) -> NDArray[np.float64]:
 
 @njit(cache=True, inline="always")
 def clip2(x, y, limit):
-    """(x, y) scaled down to norm <= limit, overflow-safe (see :func:`clip_norm`)."""
+    """(x, y) scaled down to norm <= limit, overflow-safe (see ``clip_norm``)."""
     length = np.sqrt(x * x + y * y)
     if not np.isfinite(length):
         # |u|^2 overflowed: scale by the largest component first

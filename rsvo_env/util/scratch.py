@@ -3,7 +3,7 @@ stages. Every array numba hands to an inlined function, and every view of one, i
 atomic increment and decrement of its owner's count. Per agent, a solve that hands its rows
 down through the inlined linear programs pays five such pairs, a quarter of R-ORCA's time in a
 crowd of 16 (measured with perf: ``benchmarks/results/rorca_speed.md``). A view made by
-:func:`borrow` has no owner to count; the array it views must outlive it, which an argument of
+``borrow`` has no owner to count; the array it views must outlive it, which an argument of
 the function that borrows it does, where that function is called and not inlined (the caller
 holds the argument until the call returns; inlined, the caller's variable may be released after
 its last use, the borrow)."""

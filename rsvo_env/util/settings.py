@@ -1,7 +1,7 @@
 """What the layers below the filter read of its configuration.
 
-:class:`rsvo_env.filter.config.FilterConfig` is the one implementation. The bodies and the
-dynamics models take it as a :class:`FilterSettings`, so that they never import the filter
+[`FilterConfig`][rsvo_env.FilterConfig] is the one implementation. The bodies and the
+dynamics models take it as a ``FilterSettings``, so that they never import the filter
 layer above them (``docs/architecture.md``).
 """
 

@@ -6,7 +6,7 @@ cores: where several processes share few cores, as SB3's ``SubprocVecEnv``, Ray'
 and the step becomes many times slower than one thread's (``benchmarks/results/contention.md``).
 One thread cannot stall, and the library's throughput tables are measured with one. A process
 that has its cores to itself opts in: ``RSVO_NUM_THREADS=2`` in the environment, or
-:func:`set_num_threads` (:func:`using` for a block). Kernels then run in parallel over at least
+``set_num_threads`` (``using`` for a block). Kernels then run in parallel over at least
 ``sizes.PARALLEL_MIN_PROBLEMS`` independent problems, below which a launch costs more than it
 saves.
 """
@@ -73,14 +73,14 @@ def using(n: int) -> Iterator[None]:
 
 def parallel(work: int) -> bool:
     """The one rule for running in parallel: opted in, and at least
-    ``sizes.PARALLEL_MIN_PROBLEMS`` independent problems (``work``). It sets nothing: :func:`launch`
+    ``sizes.PARALLEL_MIN_PROBLEMS`` independent problems (``work``). It sets nothing: ``launch``
     sets numba's count for the launch and puts the caller's back."""
     return _threads > 1 and work >= sizes.PARALLEL_MIN_PROBLEMS
 
 
 def launch(serial: Callable, prange: Callable, work: int, *args: Any) -> Any:
     """Call the form of a kernel that pays over ``work`` agents: its ``prange`` form on the
-    library's threads in parallel (:func:`parallel`'s rule) or on one thread from
+    library's threads in parallel (``parallel``'s rule) or on one thread from
     ``sizes.PRANGE_FORM_MIN_AGENTS`` agents (faster than the plain loop there), else ``serial``.
     numba's thread count for the calling thread, which a user's own kernels read, is set for
     the launch only and put back after it."""

@@ -32,8 +32,8 @@ def plane(mine, other, vo, R, avoid, slack, inv_tau, dt):
     """An agent's R-ORCA half-plane against a neighbour as a row ``(ax, ay, b)`` of
     ``A . v <= b``, ``(ax, ay)`` a unit normal (eq. ``rorca``): ``mine`` the agent's (x, y, vx,
     vy), ``other`` the neighbour's position, ``vo`` the velocity at which the agent reads it
-    (:func:`seen`), ``R`` the sum of their radii, ``avoid`` the agent's share of the avoidance,
-    ``slack`` of the slack. Scalars in and out: see :func:`seen`."""
+    (``seen``), ``R`` the sum of their radii, ``avoid`` the agent's share of the avoidance,
+    ``slack`` of the slack. Scalars in and out: see ``seen``."""
     rx, ry = other[0] - mine[0], other[1] - mine[1]
     wx0, wy0 = mine[2] - vo[0], mine[3] - vo[1]
     d2, R2 = rx * rx + ry * ry, R * R
@@ -74,7 +74,7 @@ def plane(mine, other, vo, R, avoid, slack, inv_tau, dt):
 def seen(me_parked, other_parked, pref_x, pref_y, v_x, v_y):
     """The velocity at which an agent reads a neighbour: the neighbour's preferred one
     (``pref_x``, ``pref_y``) where the agent is parked and the neighbour is not
-    (:func:`shares`), else its current one. Scalars in and out: an array row is a view, and a
+    (``shares``), else its current one. Scalars in and out: an array row is a view, and a
     view, or an array handed to an inlined function, costs atomic reference counts, as much as
     the row's arithmetic."""
     if me_parked and not other_parked:
@@ -105,7 +105,7 @@ def shares(tied, park_first, park_second, w0, w1, me_first):
 @njit(cache=True, inline="always")
 def solve(px, py, rows, nrows, u_max, bisectors):
     """The velocity (x, y) closest to (px, py) within ``rows[:nrows]`` and the speed disk
-    ``u_max`` (ORCA's linear programs, :func:`rsvo_env.qp.disk.solve`; the least-violating one
+    ``u_max`` (ORCA's linear programs, ``rsvo_env.qp.disk.solve``; the least-violating one
     of the disk where they leave no room); ``bisectors`` its scratch. Held below ``SIDESTEP`` of
     its preferred speed, the agent takes the velocity closest to the preferred one turned right
     instead (the sidestep: a held agent keeps moving)."""
@@ -119,7 +119,7 @@ def solve(px, py, rows, nrows, u_max, bisectors):
 def cap_wanted(pref, x, goal, held, tau):
     """(wanted, speed, dist): whether an agent's arrival cap can apply (only then can the gap to
     a neighbour tell), its preferred speed and its goal distance; ``pref``, ``x``, ``goal`` its
-    preferred velocity, position and goal as pairs of scalars (:func:`seen` says why)."""
+    preferred velocity, position and goal as pairs of scalars (``seen`` says why)."""
     speed = np.sqrt(pref[0] * pref[0] + pref[1] * pref[1])
     gx, gy = goal[0] - x[0], goal[1] - x[1]
     dist = np.sqrt(gx * gx + gy * gy)
@@ -144,7 +144,7 @@ def blocked(x, goal, radius, held, reach):
 @njit(cache=True, inline="always")
 def counts_parked(tied, parked, x, goal, radius, held, reach):
     """Whether R-ORCA's parked rule (on where ``tied``) treats an agent as parked: ``parked`` on
-    its goal, or held short of a goal within its ``reach`` (:func:`blocked`)."""
+    its goal, or held short of a goal within its ``reach`` (``blocked``)."""
     return tied and (parked or blocked(x, goal, radius, held, reach))
 
 

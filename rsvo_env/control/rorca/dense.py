@@ -119,7 +119,7 @@ def _agents(lo, hi, n, x, v, pref, r, W, tied, park, settings, space, out):
 
 @njit(cache=True)
 def _stage_serial(n, motion, W, rules, settings, pref, park, out):
-    """R-ORCA for every agent of envs of ``n`` (:func:`stage`); the capped preferred velocities
+    """R-ORCA for every agent of envs of ``n`` (``stage``); the capped preferred velocities
     into ``pref``, who counts as parked into ``park``. Every cap before any solve: a solve reads
     its neighbours' capped velocities."""
     M = motion[0].shape[0]
@@ -130,7 +130,7 @@ def _stage_serial(n, motion, W, rules, settings, pref, park, out):
 
 @njit(cache=True, parallel=True)
 def _stage_parallel(n, motion, W, rules, settings, pref, park, out):
-    """:func:`_stage_serial` over chunks of agents in parallel."""
+    """``_stage_serial`` over chunks of agents in parallel."""
     x, v, r = motion[0], motion[1], motion[4]
     M = x.shape[0]
     blocks = (M + CHUNK - 1) // CHUNK

@@ -88,7 +88,7 @@ def _steer(motion, radii, flags, rules, routing, weights, settings):
 
 @njit(cache=True)
 def _nominal(move, motion, radii, flags, rules, routing, weights, settings):
-    """:func:`_steer` of the move-to-goal velocities (``control.nominal.move_to_goal``):
+    """``_steer`` of the move-to-goal velocities (``control.nominal.move_to_goal``):
     ``move`` (positions (E, N, 2), gain k, speed, whether the right-hand rule turns, the agents
     it turns (E, N), its rotation's cosine and sine); ``motion`` (points, their velocities,
     goals)."""

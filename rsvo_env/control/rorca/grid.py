@@ -169,7 +169,7 @@ def _weigh_block(lo, hi, n, perm, ths, lists, W, weight):
     """Agents lo..hi's kept pairs' weights into ``weight`` (M, K, 2), the first agent's (the
     lower index) and the second's: the matrices ``W`` (E * n, n)'s entries, or without them
     (``W`` empty) ``cos(pi theta_first / (theta_first + theta_second))`` into
-    ``weight[..., 0]``, turned into weights where they are read (:func:`_solve_block`). The
+    ``weight[..., 0]``, turned into weights where they are read (``_solve_block``). The
     cosine is libm's, as numpy's (``responsibility.pair_weights.scored_pairs``), in a loop of
     its own: in the solve's it costs four times as much."""
     nbr, count = lists[1], lists[2]
@@ -240,20 +240,20 @@ def _lists(M, keep):
 
 @njit(cache=True, parallel=True)
 def _stage(n, motion, theta, rules, W, symmetric, settings, out):
-    """:func:`_passes` with its chunks of agents in parallel."""
+    """``_passes`` with its chunks of agents in parallel."""
     _passes(n, motion, theta, rules, W, symmetric, settings, out)
 
 
 @njit(cache=True)
 def stage_serial(n, motion, theta, rules, W, symmetric, settings, out):
-    """:func:`_passes` on the calling thread, its chunks one after the other: on one thread
+    """``_passes`` on the calling thread, its chunks one after the other: on one thread
     the faster form (a parallel region costs its launch even on one thread)."""
     _passes(n, motion, theta, rules, W, symmetric, settings, out)
 
 
 @njit(cache=True, inline="always")
 def _passes(n, motion, theta, rules, W, symmetric, settings, out):
-    """R-ORCA for every agent of envs of ``n`` (:func:`stage`), pass after pass, each over chunks
+    """R-ORCA for every agent of envs of ``n`` (``stage``), pass after pass, each over chunks
     of agents: the grid and the data in cell order, each agent's K nearest and capped
     preferred velocity, their pairs' weights, the solves (each clipped to the speed limit)."""
     K = settings[0]

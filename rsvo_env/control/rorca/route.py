@@ -76,7 +76,7 @@ def routed(
 
 @njit(cache=True)
 def route_envs(x, v, g, at_goal, scale, slow_speed, cos_t, sin_t, degrees, out):
-    """:func:`routed` env by env: the stuck agents in the spatial grid (``util.grid``) of cells
+    """``routed`` env by env: the stuck agents in the spatial grid (``util.grid``) of cells
     a probe's diameter wide (a probe's disk touches two per axis, so it visits four; cells of
     its radius, nine to visit), wider where the stuck agents are spread thin (the cells number
     at most four per stuck agent); each probe a scan of the cells its disk touches."""

@@ -14,7 +14,7 @@ The velocity is the one closest to the preferred velocity within the half-planes
 disk, by ORCA's own linear programs (``rsvo_env.qp.disk``); where they leave no room, the
 velocity of the disk whose largest violation is least (ORCA's third). The R-CBF
 filter on top keeps the guarantee whatever this controller proposes. Envs of at most
-``sizes.ALL_PAIRS_MAX_AGENTS`` agents run :mod:`rsvo_env.control.rorca.dense`'s stage (the
+``sizes.ALL_PAIRS_MAX_AGENTS`` agents run ``rsvo_env.control.rorca.dense``'s stage (the
 env's agents read in place, the weights from its matrix); larger ones this module's, over the
 pairs of the grid search.
 """
@@ -112,7 +112,7 @@ def arrival_capped(
 
 @njit(cache=True)
 def _cap_pairs(x, g, pref, r, I, J, tau, held, out):
-    """:func:`arrival_capped`: each agent's gap (the least over its pairs, in any order), then
+    """``arrival_capped``: each agent's gap (the least over its pairs, in any order), then
     its cap."""
     M = x.shape[0]
     gap = np.full(M, np.inf)
@@ -158,7 +158,7 @@ def goal_blocked(
 
 @njit(cache=True)
 def _blocked_all(x, g, r, held, reach, out):
-    """:func:`goal_blocked` over flat rows, by the stages' own rule (``agent.blocked``)."""
+    """``goal_blocked`` over flat rows, by the stages' own rule (``agent.blocked``)."""
     for a in range(x.shape[0]):
         out[a] = blocked((x[a, 0], x[a, 1]), (g[a, 0], g[a, 1]), r[a], held[a], reach)
 
@@ -168,7 +168,7 @@ class Rules(NamedTuple):
     (E, N) agents at their goals, ``goals`` (E, N, 2), ``held`` (E, N) agents held short of
     them; ``omega`` (E, N, N), the weight matrices of the scores where the caller keeps them
     (the simulation core does, ``State.omega``), read rather than computed again; and the goal
-    rule's ``reach`` (:func:`goal_blocked`) and ``goal_held`` (E, N), the agents held long
+    rule's ``reach`` (``goal_blocked``) and ``goal_held`` (E, N), the agents held long
     enough for it (None: ``held``)."""
 
     parked: NDArray | None = None
@@ -201,10 +201,10 @@ def rorca_velocities(
     ``modes`` (``"symmetric"``: ORCA); ``parked`` (E, N): agents at their goals, which take all
     of the avoidance and none of the slack from agents en route, read at their preferred
     velocities, and so do the agents held short of goals within the goal rule's ``reach``
-    (:func:`goal_blocked`); ``goals`` (E, N, 2): near its goal, where its look-ahead reaches a
-    neighbour, an agent's preferred speed is capped (:func:`arrival_capped`), only the agents
+    (``goal_blocked``); ``goals`` (E, N, 2): near its goal, where its look-ahead reaches a
+    neighbour, an agent's preferred speed is capped (``arrival_capped``), only the agents
     ``held`` (E, N) if given; these three, the ``reach`` and ``goal_held`` are ``rules``
-    (:class:`Rules`, None: none of them), and so are the weight matrices ``omega`` (E, N, N)
+    (``Rules``, None: none of them), and so are the weight matrices ``omega`` (E, N, N)
     of ``theta`` and ``modes`` where the caller keeps them (read, not computed again)."""
     parked, goals, held, omega, reach, goal_held = Rules() if rules is None else rules
     E, n = positions.shape[:2]

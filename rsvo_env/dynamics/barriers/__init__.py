@@ -1,6 +1,6 @@
 """The double integrator's barriers by name: the registry (``docs/architecture.md``). A new
-barrier is one module with a subclass of :class:`Barrier` plus one line below (or a call of
-:func:`register`); ``FilterConfig.barrier`` names one."""
+barrier is one module with a subclass of ``Barrier`` plus one line below (or a call of
+``register``); ``FilterConfig.barrier`` names one."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ __all__ = ["BARRIERS", "SPLITS", "Barrier", "get", "names", "register"]
 
 
 def register(barrier: Barrier) -> Barrier:
-    """Add ``barrier`` (an instance of a :class:`Barrier` subclass) under its ``name``; a name
+    """Add ``barrier`` (an instance of a ``Barrier`` subclass) under its ``name``; a name
     taken by another barrier raises."""
     if not isinstance(barrier, Barrier) or not isinstance(barrier.name, str) or not barrier.name:
         raise TypeError(f"register takes a Barrier with a name, got {shown(barrier)}")

@@ -80,7 +80,7 @@ def backup_rows(
     (weights (P, 2)) and the obstacles ``capsules`` ((E, O, 5) or (1, O, 5), ``n`` agents an
     env), stored by agent: pair rows, obstacle rows, then the four rows of its trust box (the
     agent itself their neighbour). ``bodies``: each agent's body radius (M,) and box ``lo``,
-    ``hi`` (M, 2) (:class:`AgentBoxes`, or the filter's ``Bodies``). Returns the rows and each
+    ``hi`` (M, 2) (``AgentBoxes``, or the filter's ``Bodies``). Returns the rows and each
     agent's smallest obstacle h (None without obstacles)."""
     radii, lo, hi = bodies.radii, bodies.lo, bodies.hi
     M = len(positions)

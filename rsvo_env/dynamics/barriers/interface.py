@@ -1,6 +1,6 @@
 """The barrier interface of the double integrator (``docs/double_integrator.md``): what the
 filter asks of a barrier, whatever its safe set. A new barrier is one module with a subclass of
-:class:`Barrier` plus one line in the registry (``rsvo_env.dynamics.barriers``)."""
+``Barrier`` plus one line in the registry (``rsvo_env.dynamics.barriers``)."""
 
 from __future__ import annotations
 

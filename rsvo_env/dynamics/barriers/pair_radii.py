@@ -38,7 +38,7 @@ def double_integrator_radii(
     (``docs/double_integrator.md``).
 
     Bodies and boxes of their own give the worst pair's values: ``safety_radius`` the largest
-    ``r_i + r_j``, and ``worst`` (:class:`WorstPair`); None: those of the one box ``lo``, ``hi``
+    ``r_i + r_j``, and ``worst`` (``WorstPair``); None: those of the one box ``lo``, ``hi``
     and ``safety_radius``.
 
     A row ``-c dp.a_i <= s_ij`` cannot bind when ``s_ij >= c |dp| U`` (``U`` the box's largest

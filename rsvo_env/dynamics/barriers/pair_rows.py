@@ -1,7 +1,7 @@
 """The braking and HOCBF barriers' pair rows for the double integrator
 (``docs/double_integrator.md``), vectorised over all pairs: one pair row
 ``c (-dp.a_i + dp.a_j) <= RHS`` split into ``-c dp.a_i <= s_ij`` and ``c dp.a_j <= s_ji`` with
-``s_ij + s_ji = RHS``, each agent's row stored by agent (:class:`rsvo_env.qp.rows.Rows`). A batch
+``s_ij + s_ji = RHS``, each agent's row stored by agent (``rsvo_env.qp.rows.Rows``). A batch
 of E envs is one flat set of E * N agents: agent ``e * N + i`` is agent i of env e, and pairs
 never cross envs.
 """
@@ -110,7 +110,7 @@ def double_integrator_rows(
     radii: NDArray | None = None,
 ) -> Rows:
     """Rows for the double integrator (``docs/double_integrator.md``) under ``spec``
-    (:class:`BarrierSpec`).
+    (``BarrierSpec``).
 
     ``lo``, ``hi``: one box (2,) or one per agent (n, 2); ``radii`` (n,): body radii, a pair
     safe at ``Ds = r_i + r_j`` (None: ``safety_radius`` for every pair). With boxes of their
@@ -121,7 +121,7 @@ def double_integrator_rows(
     ``RHS = (|dv|^2 - q^2) - A |dp| + gamma h A |dp| / (-q)``. While opening there is no row,
     unless ``dt`` is given: then the one-step row
     ``RHS = (|dv|^2 - q^2) + 2 |dp| (q + gamma (|dp| - Ds)) / dt``, and for every pair the
-    sampled-data bound :func:`rsvo_env.dynamics.barriers.sampled.sampled_braking_rhs`
+    sampled-data bound ``rsvo_env.dynamics.barriers.sampled.sampled_braking_rhs``
     (``h+ >= (1 - gamma dt) h`` at the next sample), the smallest RHS of the three; where that
     bound's reversal term puts it beyond the box, the pair also gets a row keeping its tangential
     relative speed from changing sign within the step (``-e_t.(a_i - a_j) <= w_t / dt``).

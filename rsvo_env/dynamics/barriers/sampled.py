@@ -33,7 +33,7 @@ def sampled_braking_rhs(
     ``|dp+| = sqrt(R^2 + T^2)`` over the box: ``G >= (1 - gamma dt) h`` is
     ``alpha_r >= alpha*``, one half-plane. Full braking (``alpha_r = A``) meets it whenever
     ``E = 0`` and ``h >= 0``. ``reversal=False``: E = 0, for actions that cannot reverse the
-    tangential speed (:func:`double_integrator_rows` adds the row that forbids it).
+    tangential speed (``double_integrator_rows`` adds the row that forbids it).
     """
     out = np.empty(len(dist))
 
@@ -47,7 +47,7 @@ def sampled_braking_rhs(
 
 @njit(cache=True)
 def _sampled(dist, q, dv2, h, A_, U_, gamma, dt, safety_radius, reversal, out):
-    """:func:`sampled_braking_rhs`, one pair at a time (NaN in, NaN out)."""
+    """``sampled_braking_rhs``, one pair at a time (NaN in, NaN out)."""
     for p in range(dist.shape[0]):
         d, qp, A, U = dist[p], q[p], A_[p], U_[p]
         window2 = (2.0 * U * dt) ** 2

@@ -73,7 +73,7 @@ def segment_rows(
     """Every agent's rows of the stopping-segment barrier (module docstring) against the pairs
     (I, J) (weights (P, 2)) and the obstacles ``capsules`` ((E, O, 5) or (1, O, 5), ``n`` agents
     an env), stored by agent: two rows per pair, two per obstacle, then the four rows of its
-    trust box; as :func:`rsvo_env.dynamics.barriers.backup.backup_rows`. Returns the rows and each
+    trust box; as ``rsvo_env.dynamics.barriers.backup.backup_rows``. Returns the rows and each
     agent's smallest obstacle h (None without obstacles)."""
     radii, lo, hi = bodies.radii, bodies.lo, bodies.hi
     M = len(positions)

@@ -45,7 +45,7 @@ class SplitBarrier(Barrier):
         J: NDArray,
         bodies: Bodies,
     ) -> Rows:
-        """Every agent's rows for the pairs (I, J) alone (:meth:`Barrier.filter_rows`'s
+        """Every agent's rows for the pairs (I, J) alone (``Barrier.filter_rows``'s
         arguments)."""
         if bodies.uniform:
             lo, hi, radii = cfg.lo, cfg.hi, None

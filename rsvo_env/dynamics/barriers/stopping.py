@@ -87,7 +87,7 @@ class AgentTerms:
 
 
 def agent_terms(v: NDArray, lo: NDArray, hi: NDArray, dt: float | None) -> AgentTerms:
-    """:class:`AgentTerms` of agents with velocities ``v`` (M, 2) and boxes (M, 2)."""
+    """``AgentTerms`` of agents with velocities ``v`` (M, 2) and boxes (M, 2)."""
     c = braking_capability(lo, hi)
     speed = np.sqrt((v * v).sum(axis=-1))
     L = stopping_reach(speed, c, dt)
@@ -140,7 +140,7 @@ def _binding(A, b, owner, box_lo, box_hi, cull, keep):
 
 @njit(cache=True, inline="always", error_model="numpy")
 def row_kept(ax, ay, b, lo_x, hi_x, lo_y, hi_y, cull):
-    """One row ``(ax, ay) . a <= b`` as :func:`binding` keeps it: ``(ax, ay, b, keep)``, an
+    """One row ``(ax, ay) . a <= b`` as ``binding`` keeps it: ``(ax, ay, b, keep)``, an
     undefined row made ``0 . a <= -1`` and kept, a defined one kept where it can bind over
     the box ``[lo, hi]`` (or always without ``cull``)."""
     if not (np.isfinite(ax) and np.isfinite(ay) and np.isfinite(b)):

@@ -1,0 +1,28 @@
+"""The site's pages are written for readers: the result, the method, the argument. How a result
+was reached (issue numbers, the commits it was measured at) belongs in the changelog."""
+
+from __future__ import annotations
+
+import re
+
+from tests.support.checkout import ROOT
+
+HISTORY = re.compile(r"\b[Ii]ssues? #?\d+|\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*\d)[0-9a-f]{7,40}\b")
+
+
+def history_in(text: str) -> list[str]:
+    return [m.group(0) for m in HISTORY.finditer(text)]
+
+
+def test_no_issue_number_or_commit_hash_in_a_page():
+    found = {
+        str(p.relative_to(ROOT)): history_in(p.read_text())
+        for p in sorted((ROOT / "docs").rglob("*.md"))
+        if history_in(p.read_text())
+    }
+    assert not found, found
+
+
+def test_the_check_finds_both():
+    assert history_in("since issue 45, measured at 230d50f") == ["issue 45", "230d50f"]
+    assert history_in("a 1,000-agent crowd, seed 1008, colour #1f77b4") == []
