@@ -41,11 +41,20 @@ def scenario_page(env_id: str, scenario: str) -> str:
 
     cls = SCENARIOS[scenario]
     about = " ".join(inspect.cleandoc(cls.__doc__ or "").split())
-    from rsvo_env import dynamics
+    from rsvo_env import control, dynamics
+    from rsvo_env.scenarios.base import COMMON_DEFAULTS
 
     rows = "\n".join(f"| `{k}` | `{v!r}` |" for k, v in cls.defaults.items())
     own = dynamics.MODELS[cls.dynamics].scenario_defaults
     rows += "".join(f"\n| `{k}` | `{v!r}` |" for k, v in own.items() if k not in cls.defaults)
+    # the keywords every scenario takes (the common ones, the controllers' settings), where this
+    # one keeps their defaults
+    shared = {**COMMON_DEFAULTS, **control.settings()}
+    rows += "".join(
+        f"\n| `{k}` | `{v!r}` (every scenario's) |"
+        for k, v in shared.items()
+        if k not in cls.defaults
+    )
     if cls.models:
         rows += f"\n| `dynamics` | `{cls.dynamics!r}` (or any of `{cls.models!r}`) |"
         rows += "".join(

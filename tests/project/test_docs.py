@@ -33,6 +33,12 @@ PRINTED = {
     "docs/scenarios.md[0]": lambda out: out.startswith("True 0 "),
     "docs/liveness.md[0]": lambda out: out.strip() == "[]",
     "docs/threads.md[0]": lambda out: out.split() == ["2", "1"],
+    "docs/tutorials/own_simulator.md[0]": lambda out: out.strip().endswith("all home: True"),
+    "docs/tutorials/walls_for_unicycles.md[0]": lambda out: out.startswith("True 0 "),
+    "docs/tutorials/train_behind_the_filter.md[0]": lambda out: out.strip() == "contacts: 0",
+    "docs/tutorials/train_behind_the_filter.md[1]": lambda out: out.startswith(
+        "filter on contacts: 0\nfilter off contacts: "
+    ) and not out.strip().endswith("contacts: 0"),
 }
 
 
@@ -116,6 +122,7 @@ def test_the_site_builds_strictly(tmp_path):
     for name in ("SafetyFilter", "BatchedEnv", "FilterConfig", "RCBFSafetyFilter"):
         assert re.search(rf'id="(rsvo_env\.[\w.]*)?{name}"', reference), name
     assert (tmp_path / "site" / "gallery" / "index.html").exists()
+    assert (tmp_path / "site" / "results" / "rorca_speed" / "index.html").exists()
     assert (tmp_path / "site" / "images" / "doorway.gif").exists()
 
 

@@ -26,3 +26,14 @@ def test_no_issue_number_or_commit_hash_in_a_page():
 def test_the_check_finds_both():
     assert history_in("since issue 45, measured at 230d50f") == ["issue 45", "230d50f"]
     assert history_in("a 1,000-agent crowd, seed 1008, colour #1f77b4") == []
+
+
+def test_every_results_file_is_a_page_of_the_site():
+    """The results files the pages cite are published (``docs/hooks/results_pages.py``) and
+    each is in the navigation."""
+    nav = (ROOT / "mkdocs.yml").read_text()
+    results = sorted((ROOT / "benchmarks" / "results").glob("*.md"))
+    assert len(results) >= 20
+    missing = [p.name for p in results if f"results/{p.name}" not in nav]
+    assert not missing, missing
+    assert "docs/hooks/results_pages.py" in nav
