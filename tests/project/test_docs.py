@@ -36,9 +36,10 @@ PRINTED = {
     "docs/tutorials/own_simulator.md[0]": lambda out: out.strip().endswith("all home: True"),
     "docs/tutorials/walls_for_unicycles.md[0]": lambda out: out.startswith("True 0 "),
     "docs/tutorials/train_behind_the_filter.md[0]": lambda out: out.strip() == "contacts: 0",
-    "docs/tutorials/train_behind_the_filter.md[1]": lambda out: out.startswith(
-        "filter on contacts: 0\nfilter off contacts: "
-    ) and not out.strip().endswith("contacts: 0"),
+    "docs/tutorials/train_behind_the_filter.md[1]": lambda out: (
+        out.startswith("filter on contacts: 0\nfilter off contacts: ")
+        and not out.strip().endswith("contacts: 0")
+    ),
 }
 
 
