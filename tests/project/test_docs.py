@@ -124,6 +124,9 @@ def test_the_site_builds_strictly(tmp_path):
         assert re.search(rf'id="(rsvo_env\.[\w.]*)?{name}"', reference), name
     assert (tmp_path / "site" / "gallery" / "index.html").exists()
     assert (tmp_path / "site" / "results" / "rorca_speed" / "index.html").exists()
+    # the formulas are MathML, built in: no script, no network
+    maths = (tmp_path / "site" / "math" / "index.html").read_text()
+    assert maths.count("<math") >= 20 and "$$" not in maths
     assert (tmp_path / "site" / "images" / "doorway.gif").exists()
 
 

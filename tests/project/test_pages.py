@@ -37,3 +37,15 @@ def test_every_results_file_is_a_page_of_the_site():
     missing = [p.name for p in results if f"results/{p.name}" not in nav]
     assert not missing, missing
     assert "docs/hooks/results_pages.py" in nav
+
+
+def test_formulas_become_mathml_and_code_stays_code():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("maths", ROOT / "docs" / "hooks" / "maths.py")
+    assert spec is not None and spec.loader is not None
+    maths = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(maths)
+    out = maths.render("weight $\\omega_i$, paid `$5`, and\n\n$$h^+ \\ge 0$$\n\n```\n$x$\n```\n")
+    assert out.count("<math") == 2 and 'display="block"' in out
+    assert "`$5`" in out and "```\n$x$\n```" in out
