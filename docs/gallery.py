@@ -7,8 +7,9 @@ how to make it) and the gallery page that shows them all.
 
 The pages come from the code (each scenario's docstring and defaults, the registry's ids and
 step limits), so they cannot drift from it: the tests regenerate them and compare. The
-pictures are one episode of seed 0 under the scenario's own scripted controller behind the
-filter, the same as ``rsvo simulate NAME --png ... --gif ...``.
+pictures are one episode of seed 0, every theta drawn from U(1, 10), under the scenario's own
+scripted controller behind the filter (``rsvo_env.cli.episode.run``, which ``rsvo simulate``
+runs).
 """
 
 from __future__ import annotations
@@ -69,8 +70,10 @@ def scenario_page(env_id: str, scenario: str) -> str:
 
 ![{title(scenario)}, one episode](../images/{scenario}.gif)
 
-One episode, seed 0, under the scenario's own scripted controller behind the filter (the same
-as `rsvo simulate {scenario} --gif {scenario}.gif --png {scenario}.png`); its paths:
+One episode, seed 0, every agent's θ drawn from U(1, 10) (red: egoist, small θ; blue:
+altruist), under the scenario's own scripted controller behind the filter
+(`rsvo_env.cli.episode.run("{scenario}", theta_range=(1.0, 10.0), gif=...)`, which
+`rsvo simulate` runs); its paths:
 
 ![{title(scenario)}, the paths of that episode](../images/{scenario}.png)
 
@@ -147,9 +150,11 @@ def picture(scenario: str, name: str, **kwargs: object) -> None:
     from rsvo_env.cli.figures import episode
 
     IMAGES.mkdir(exist_ok=True)
+    # personalities spread over 1..10, so that the colours say who yields (the paper's point)
+    kwargs = {"theta_range": (1.0, 10.0), **kwargs}
     out = run(scenario, gif=IMAGES / f"{name}.gif", gif_every=10, render_size=300, **kwargs)
-    fig = episode(out, scenario, "asymmetric", filtered=True)
-    fig.savefig(IMAGES / f"{name}.png", dpi=80, bbox_inches="tight")
+    fig = episode(out, scenario, "asymmetric", filtered=True, legend="markers")
+    fig.savefig(IMAGES / f"{name}.png", dpi=100, bbox_inches="tight")
     plt.close(fig)
     print(name, out["steps"], "steps,", out["n_collision_steps"], "collision steps")
 

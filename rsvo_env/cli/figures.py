@@ -92,10 +92,19 @@ def event_marks(out: dict) -> tuple[list[int], list[str]]:
     return marks, labels
 
 
-def episode(out: dict, scenario: str, weighting: str, filtered: bool = True) -> Any:
+def episode(
+    out: dict, scenario: str, weighting: str, filtered: bool = True, legend: bool | str = True
+) -> Any:
     """One episode's trajectories, its events marked, titled with scenario, theta, weighting
-    and filter (``rsvo simulate --png`` and the circular figures)."""
+    and filter (``rsvo simulate --png`` and the circular figures); ``legend`` as
+    ``rendering.plot_trajectories``' (``"markers"``: a picture shown small, its title short)."""
     marks, labels = event_marks(out)
+    if legend == "markers":
+        return plot_trajectories(out["trajectory"], out["goals"], out["theta"],
+                                 out["safety_radius"], marks=marks, mark_labels=labels,
+                                 title=f"{scenario}, {weighting} weighting, "
+                                 + ("filter on" if filtered else "no filter"),
+                                 obstacles=out.get("obstacles"), legend="markers")  # fmt: skip
     theta = ", ".join(f"{t:g}" for t in out["theta"])
     return plot_trajectories(
         out["trajectory"],

@@ -240,7 +240,9 @@ def plot_trajectories(
     final position (a disc of radius R/2 with the agent's number in it) and its goal (cross).
     ``marks`` are steps at which the agents are also drawn (faded discs), named by
     ``mark_labels`` in the legend (e.g. deadlock onset, resolution). ``legend="agents"`` keeps
-    only the agents' entries (for panels that share ``marker_handles`` in one figure legend).
+    only the agents' entries (for panels that share ``marker_handles`` in one figure legend);
+    ``legend="markers"`` only the markers', in a type that stays legible when the picture is
+    shown small (the colour bar names each agent's theta).
     ``obstacles`` (O, 5): capsules, drawn grey at their true size. Equal scores have no colour
     scale to show: the bar is left out and the legend names the one theta.
     """
@@ -285,6 +287,11 @@ def plot_trajectories(
     ax.set_ylabel("y [m]")
     if legend == "agents":
         ax.legend(handles=handles, fontsize=6, loc="upper left")
+    elif legend == "markers":
+        handles = marker_handles(mark_labels)
+        if obstacles is not None and len(obstacles):
+            handles.append(Patch(color=OBSTACLE_GREY, label="obstacle"))
+        ax.figure.legend(handles=handles, fontsize=11, loc="outside lower center", ncol=2)
     elif legend:
         handles += marker_handles(mark_labels)
         if obstacles is not None and len(obstacles):
@@ -305,7 +312,8 @@ def plot_trajectories(
         cmap = LinearSegmentedColormap.from_list("theta", [EGOIST / 255.0, ALTRUIST / 255.0])
         norm = Normalize(float(theta.min()), float(theta.max()))
         bar = ax.figure.colorbar(plt.cm.ScalarMappable(norm, cmap), ax=ax, shrink=0.8)
-        bar.set_label("theta: red egoist (small), blue altruist (large)", fontsize=7)
+        big = legend == "markers"
+        bar.set_label("theta: red egoist (small), blue altruist (large)", fontsize=11 if big else 7)
     if title:
-        ax.set_title(title, fontsize=9)
+        ax.set_title(title, fontsize=12 if legend == "markers" else 9)
     return ax.figure
