@@ -53,7 +53,7 @@ def env(scenario: str = "circular_swap", safety_filter: bool = True, **kwargs: A
     Returns:
         The AEC env.
     """
-    from rsvo_env.envs.parallel import aec_from_parallel
+    from rsvo_env.envs.aec import aec_from_parallel
 
     return aec_from_parallel(parallel_env(scenario, safety_filter, **kwargs))
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from benchmarks.harness import RESULTS, machine
 from rsvo_env.control.nominal import move_to_goal
+from rsvo_env.filter import dense
 from rsvo_env.filter.config import FilterConfig
 from rsvo_env.filter.safety import SafetyFilter
 from rsvo_env.scenarios import Crowd
@@ -71,9 +72,11 @@ def main() -> None:
                     raise AssertionError(f"N = {n}: the two paths disagree")
 
             def dense_pass(flt=flt, seq=seq, theta=theta) -> None:
-                omega = flt._matrix(theta, None)
+                omega = flt._weights.matrix(theta, None)
                 for x, u in seq:
-                    flt._apply_dense(x, u, omega, flt._default_bodies[(1, x.shape[1])])
+                    dense.dense_result(
+                        flt.config, x, u, omega, flt._default_bodies[(1, x.shape[1])]
+                    )
 
             def general(flt=flt, seq=seq, theta=theta) -> None:
                 for x, u in seq:

@@ -16,7 +16,6 @@ import numpy as np
 from gymnasium.utils import seeding
 from numpy.typing import NDArray
 from pettingzoo import ParallelEnv
-from pettingzoo.utils import BaseWrapper
 
 from rsvo_env.control.residual import Residual
 from rsvo_env.envs import global_state
@@ -28,7 +27,6 @@ from rsvo_env.responsibility.svo import Weighting, check_weighting
 from rsvo_env.scenarios import Scenario
 from rsvo_env.sim.metrics import FLAT_FIELDS, EpisodeMetrics
 from rsvo_env.util.validation import (
-    check_action,
     check_action_dict,
     check_count,
     check_flag,
@@ -386,22 +384,3 @@ class RSVOParallelEnv(ParallelEnv):
             rng, _ = seeding.np_random()
             self.sim.rngs[0] = rng
         return rng
-
-
-class CheckedActionsAEC(BaseWrapper):
-    """The AEC form of an env (``parallel_to_aec``) that refuses a bad action when it is
-    submitted: PettingZoo's converter only stores it and steps the parallel env once every agent
-    has acted, so a NaN would surface at another agent's turn, and every turn after it."""
-
-    def step(self, action: Any) -> None:
-        agent = self.agent_selection
-        if action is not None and not (self.terminations[agent] or self.truncations[agent]):
-            check_action(action, agent, self.action_space(agent).shape)
-        super().step(action)
-
-
-def aec_from_parallel(parallel: Any) -> CheckedActionsAEC:
-    """``parallel_to_aec`` with the actions checked on submission."""
-    from pettingzoo.utils.conversions import parallel_to_aec
-
-    return CheckedActionsAEC(parallel_to_aec(parallel))

@@ -9,12 +9,15 @@ solve (``exact.solve_rows``). The same arithmetic, rows in the same order, as th
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
 from rsvo_env.dynamics.single_integrator import single_integrator_row
 from rsvo_env.filter.projection_disk import disk_support
+from rsvo_env.filter.result import FilterResult
 from rsvo_env.qp.exact import solve_rows
 from rsvo_env.qp.rows import support
 from rsvo_env.util import threads
@@ -202,3 +205,26 @@ def filter_dense(
     # compiled function runs many times slower
     threads.launch(_serial, _parallel, E * n, *args)
     return outputs
+
+
+def dense_result(
+    cfg: Any, positions: NDArray, nominal: NDArray, omega: NDArray, bodies: Any
+) -> FilterResult:
+    """The compiled all-pairs pass (:func:`filter_dense`) as a ``FilterResult``: ``positions``
+    and ``nominal`` (E, N, 2), ``omega`` (E, N, N), the filter's config ``cfg`` and each
+    agent's ``bodies``; no rows kept (none is built)."""
+    actions, feasible, active, violation, n_rows, min_h, intervention = filter_dense(
+        positions, nominal, omega, cfg.gamma, bodies.radii, bodies.lo, bodies.hi
+    )
+    zeros = np.zeros(len(min_h), dtype=np.int64)
+    return FilterResult(
+        actions=actions,
+        feasible=feasible,
+        intervention=intervention,
+        active=active,
+        min_h=min_h,
+        max_violation=violation,
+        n_rows=n_rows,
+        n_unrecoverable_pairs=zeros,
+        n_capped_shares=zeros,
+    )

@@ -4,11 +4,15 @@ Each raises ``ValueError`` naming the field, the agent and the value."""
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
+import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rsvo_env.filter.config import FilterConfig
 from rsvo_env.geometry.bodies import Bodies, check_per_agent
 from rsvo_env.geometry.obstacles import Obstacles
+from rsvo_env.responsibility.pair_weights import Floor
 from rsvo_env.util.validation import shown
 
 
@@ -57,3 +61,13 @@ def check_obstacles(obstacles: Obstacles | None, lead: tuple[int, ...]) -> NDArr
             f"or one an env ({lead[0] if lead else 1}, O, 5)"
         )
     return caps
+
+
+class KnownScenes(NamedTuple):
+    """What a caller of ``SafetyFilter.apply`` already knows of its scenes: each scene's
+    smallest weight ``omega_min`` (E,), each agent's nearest distance ``nearest`` (E, N), and
+    ``floor``, ``pair_weights.weight_floor`` of the weights."""
+
+    omega_min: NDArray[np.float64] | None = None
+    nearest: NDArray[np.float64] | None = None
+    floor: Floor | None = None

@@ -11,8 +11,8 @@ as the stage of its step right before integration.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Sequence
-from typing import Any, NamedTuple
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -22,9 +22,11 @@ from rsvo_env.filter import projection_disk
 from rsvo_env.filter import statistics as scene_barrier
 from rsvo_env.filter.config import FilterConfig
 from rsvo_env.filter.inputs import (
+    KnownScenes,
     check_bodies,
     check_obstacles,
 )
+from rsvo_env.filter.kept_weights import KeptWeights
 from rsvo_env.filter.result import FilterResult, per_env
 from rsvo_env.geometry import pairs
 from rsvo_env.geometry.bodies import Bodies
@@ -43,16 +45,6 @@ from rsvo_env.responsibility.svo import (
 from rsvo_env.util import sizes
 from rsvo_env.util.planar import norm, turn
 from rsvo_env.util.validation import check_theta, check_vectors, real_array
-
-
-class KnownScenes(NamedTuple):
-    """What a caller of ``SafetyFilter.apply`` already knows of its scenes: each scene's
-    smallest weight ``omega_min`` (E,), each agent's nearest distance ``nearest`` (E, N), and
-    ``floor``, ``pair_weights.weight_floor`` of the weights."""
-
-    omega_min: NDArray[np.float64] | None = None
-    nearest: NDArray[np.float64] | None = None
-    floor: Floor | None = None
 
 
 class SafetyFilter:
@@ -76,7 +68,7 @@ class SafetyFilter:
         self.config = config if config is not None else FilterConfig(**kwargs)  # type: ignore[arg-type]
         # per kind ("floor", "matrix"): the last scores and what the configured weighting
         # gave for them (a simulator calls with the same scores step after step)
-        self._kept: dict[str, tuple[NDArray, Any]] = {}
+        self._weights = KeptWeights(self.config.weighting)
         self._default_bodies: dict[tuple[int, int], Bodies] = {}
         # the last culling radii: (floor, bodies, radii, reach), see _culling_radii
         self._radii: tuple[Floor, Bodies, NDArray, NDArray] | None = None
@@ -306,8 +298,8 @@ class SafetyFilter:
         fast = not with_rows and obstacles is None and cfg.model.dense_kernel
         if fast and cfg.solver == "exact" and cfg.neighbor_radius is None:
             if n <= sizes.COMPILED_FILTER_MAX_AGENTS:  # the compiled all-pairs pass
-                omega = self._matrix(theta, weighting) if omega is None else omega
-                return self._apply_dense(positions, nominal, omega, bodies)
+                omega = self._weights.matrix(theta, weighting) if omega is None else omega
+                return dense_solver.dense_result(cfg, positions, nominal, omega, bodies)
         solve_box = bodies
         own = {} if headings is None else {"headings": headings}
         positions, solve_nominal, bodies, rotation = cfg.model.lift(
@@ -333,7 +325,7 @@ class SafetyFilter:
             I, J = pairs.all_pairs(n, E)
         elif cfg.neighbor_radius is None:
             if floor is None:
-                floor = self._floor(theta, omega)
+                floor = self._weights.floor(theta, omega)
             radii, reach = self._culling_radii(floor, velocities, bodies)
             # the search by the nominal pays where the scores spread (an altruist's radius
             # against egoists spans many neighbours); with one group of scores its tests
@@ -400,55 +392,3 @@ class SafetyFilter:
         if state_free:
             self._radii = (floor, bodies, radii, reach)
         return radii, reach
-
-    def _floor(self, theta: NDArray, omega: NDArray | None) -> Floor:
-        """``pair_weights.weight_floor`` of the weights in force, from the scores alone (O(N)
-        memory) for a named weighting."""
-        if omega is not None:  # a caller's matrix, whatever the configured mode says
-            return pair_weights.weight_floor(omega)
-        return self._of_scores("floor", theta, pair_weights.floor_of)
-
-    def _matrix(self, theta: NDArray, weighting: Sequence[Weighting] | None) -> NDArray:
-        """(E, N, N) weight matrices of ``theta`` (E, N): each env's named ``weighting``, or
-        the configured one. A caller steps with the same scores step after step, so the last
-        matrices of a named configured weighting are kept (a callable is asked every time)."""
-        if weighting is not None:
-            return np.stack([weight_matrix(t, m) for t, m in zip(theta, weighting, strict=True)])
-        return self._of_scores("matrix", theta, weight_matrix)
-
-    def _of_scores(self, kind: str, theta: NDArray, build: Callable) -> Any:
-        """``build(theta, weighting)`` of the configured weighting, kept for the last scores of
-        each ``kind`` when the weighting is named (a callable is asked every time)."""
-        mode = self.config.weighting
-        if callable(mode):
-            return build(theta, mode)
-        last = self._kept.get(kind)
-        if last is None or not np.array_equal(last[0], theta):
-            last = self._kept[kind] = (theta.copy(), build(theta, mode))
-        return last[1]
-
-    def _apply_dense(
-        self,
-        positions: NDArray,
-        nominal: NDArray,
-        omega: NDArray,
-        bodies: Bodies,
-    ) -> FilterResult:
-        cfg = self.config
-        actions, feasible, active, violation, n_rows, min_h, intervention = (
-            dense_solver.filter_dense(
-                positions, nominal, omega, cfg.gamma, bodies.radii, bodies.lo, bodies.hi
-            )
-        )
-        zeros = np.zeros(len(min_h), dtype=np.int64)
-        return FilterResult(
-            actions=actions,
-            feasible=feasible,
-            intervention=intervention,
-            active=active,
-            min_h=min_h,
-            max_violation=violation,
-            n_rows=n_rows,
-            n_unrecoverable_pairs=zeros,
-            n_capped_shares=zeros,
-        )
