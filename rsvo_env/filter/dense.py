@@ -210,7 +210,7 @@ def filter_dense(
 def dense_result(
     cfg: Any, positions: NDArray, nominal: NDArray, omega: NDArray, bodies: Any
 ) -> FilterResult:
-    """The compiled all-pairs pass (:func:`filter_dense`) as a ``FilterResult``: ``positions``
+    """The compiled all-pairs pass (``filter_dense``) as a ``FilterResult``: ``positions``
     and ``nominal`` (E, N, 2), ``omega`` (E, N, N), the filter's config ``cfg`` and each
     agent's ``bodies``; no rows kept (none is built)."""
     actions, feasible, active, violation, n_rows, min_h, intervention = filter_dense(
