@@ -18,12 +18,9 @@ from numpy.typing import NDArray
 from rsvo_env.control.nominal import clockwise, move_to_goal_into
 from rsvo_env.control.rorca import grid, route
 from rsvo_env.control.rorca.agent import HOLD_SECONDS
+from rsvo_env.control.rorca.velocities import MAX_NEIGHBORS, REACH_RADII
 from rsvo_env.responsibility.svo import symmetric_envs
 from rsvo_env.util import sizes, threads
-
-# ORCA's default: the 10 nearest neighbours within 5 pair distances (velocities.rorca_velocities)
-MAX_NEIGHBORS = 10
-REACH_RADII = 10.0
 
 
 @njit(cache=True)

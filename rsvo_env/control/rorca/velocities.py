@@ -47,6 +47,10 @@ from rsvo_env.responsibility import pair_weights
 from rsvo_env.responsibility.svo import Weighting, symmetric_envs
 from rsvo_env.util import sizes
 
+# ORCA's defaults: the 10 nearest neighbours within 5 pair distances (10 radii of the largest)
+MAX_NEIGHBORS = 10
+REACH_RADII = 10.0
+
 
 @njit(cache=True)
 def half_planes(x, v, radii, I, J, share, tau, dt, parked, seen):
@@ -190,7 +194,7 @@ def rorca_velocities(
     dt: float,
     tau: float = 2.0,
     neighbor_dist: float | None = None,
-    max_neighbors: int | None = 10,
+    max_neighbors: int | None = MAX_NEIGHBORS,
     rules: Rules | None = None,
 ) -> NDArray[np.float64]:
     """Eq. ``rorca``: each agent's velocity (E, N, 2) closest to ``preferred`` within its R-ORCA
@@ -216,7 +220,7 @@ def rorca_velocities(
     r = radii if radii.size == M else np.broadcast_to(radii, (E, n))
     r = np.ascontiguousarray(r).reshape(M)
     if neighbor_dist is None:
-        neighbor_dist = 10.0 * float(r.max())
+        neighbor_dist = REACH_RADII * float(r.max())
     # the arrival cap applies where goals are given (to the agents held, if given)
     g = x if goals is None else flat(goals)
     if goals is None:
